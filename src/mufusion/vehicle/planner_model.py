@@ -1,0 +1,148 @@
+"""The planner's model: a dynamic bicycle with tire-force inputs in the road-aligned (Frenet) frame.
+
+One function, usable with numpy arrays (vectorised over trailing axes) and with CasADi symbols, so
+the OCP, the sampling roll-outs and the tests all evaluate the very same equations
+(Svensson & Törngren, Sec. II; TAMP paper, App. B).
+
+State ``x`` (indexed by :class:`State`): progress ``s`` [m], lateral offset ``d`` [m, left +],
+heading error ``dpsi`` [rad], yaw rate ``psidot`` [rad/s], body velocities ``vx``, ``vy`` [m/s].
+
+Input ``u`` (indexed by :class:`Input`): front lateral force ``fyf``, front and rear longitudinal
+forces ``fxf``, ``fxr`` [N], all in the vehicle body frame. The rear lateral force is not free: it
+follows the rear slip angle through a linear rear tire, ``F_yr = C_r (l_r ψ̇ − v_y) / v_x``, as in the
+authors' planner; the friction polygons then bound the whole rear force pair ``(F_xr, F_yr)``.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+from typing import Any
+
+import numpy as np
+
+from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
+
+# Below this speed the slip-angle expression degenerates; the planner never plans slower than a
+# crawl in practice and the bound keeps the model finite at standstill.
+MIN_SPEED_FOR_SLIP_MPS = 1.0
+
+
+class State(IntEnum):
+    """Indices of the planner state vector."""
+
+    s = 0
+    d = 1
+    dpsi = 2
+    psidot = 3
+    vx = 4
+    vy = 5
+
+
+class Input(IntEnum):
+    """Indices of the planner input vector (tire forces in the body frame, N)."""
+
+    fyf = 0
+    fxf = 1
+    fxr = 2
+
+
+N_STATES = len(State)
+N_INPUTS = len(Input)
+
+
+def _is_symbolic(*values: Any) -> bool:
+    return any(type(v).__module__.startswith("casadi") for v in values)
+
+
+def _ops(*values: Any):
+    """Math namespace for the arguments: CasADi if any is symbolic, else numpy."""
+    if _is_symbolic(*values):
+        import casadi as ca
+
+        return ca.sin, ca.cos, ca.fmax, lambda parts: ca.vertcat(*parts)
+    return np.sin, np.cos, np.maximum, lambda parts: np.stack(np.broadcast_arrays(*parts))
+
+
+def rear_cornering_stiffness_n_per_rad(params: VehicleParams, rear_load_n: Any) -> Any:
+    """Linear rear-axle cornering stiffness [N/rad] at a rear normal load ``rear_load_n`` [N]."""
+    return params.tire.cornering_stiffness_per_load_1_per_rad * rear_load_n
+
+
+def rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleParams) -> Any:
+    """Rear lateral tire force [N] of the planner's linear rear tire.
+
+    ``F_yr = C_r (l_r ψ̇ − v_y) / max(v_x, 1 m/s)``; works on numpy arrays (``x`` of shape
+    ``(6, ...)``) and CasADi symbols.
+    """
+    _, _, fmax, _ = _ops(x, rear_stiffness_n_per_rad)
+    vx = fmax(x[State.vx], MIN_SPEED_FOR_SLIP_MPS)
+    return rear_stiffness_n_per_rad * (
+        params.cog_to_rear_axle_m * x[State.psidot] - x[State.vy]
+    ) / vx
+
+
+def normal_loads_n(longitudinal_accel_mps2: Any, params: VehicleParams) -> tuple[Any, Any]:
+    """Axle normal forces with pitch load transfer [N].
+
+    ``F_zf = m (g l_r − a_x h) / L``, ``F_zr = m (g l_f + a_x h) / L`` (TAMP framework); braking
+    (``a_x < 0``) loads the front axle. Works with numpy arrays and CasADi symbols.
+    """
+    m, h, wheelbase = params.mass_kg, params.cog_height_m, params.wheelbase_m
+    fzf = m * (GRAVITY_MPS2 * params.cog_to_rear_axle_m - longitudinal_accel_mps2 * h) / wheelbase
+    fzr = m * (GRAVITY_MPS2 * params.cog_to_front_axle_m + longitudinal_accel_mps2 * h) / wheelbase
+    return fzf, fzr
+
+
+def frenet_bicycle_dynamics(
+    x: Any,
+    u: Any,
+    curvature_1pm: Any,
+    rear_stiffness_n_per_rad: Any,
+    params: VehicleParams,
+) -> Any:
+    """Time derivative of the planner state.
+
+    Parameters
+    ----------
+    x
+        State, shape ``(6, ...)`` (numpy) or a 6-vector CasADi symbol; see :class:`State`.
+    u
+        Input forces [N], shape ``(3, ...)``; see :class:`Input`.
+    curvature_1pm
+        Reference-path curvature at the vehicle's progress ``s`` [1/m], left turns positive.
+    rear_stiffness_n_per_rad
+        Rear axle cornering stiffness [N/rad] (see :func:`rear_cornering_stiffness_n_per_rad`).
+    params
+        Vehicle parameters.
+
+    Returns
+    -------
+    x_dot
+        Same shape as ``x``: ``ṡ = (v_x cosΔψ − v_y sinΔψ)/(1 − dκ)``, ``ḋ = v_x sinΔψ + v_y cosΔψ``,
+        ``Δψ̇ = ψ̇ − κṡ``, ``ψ̈ = (l_f F_yf − l_r F_yr)/I_z``, ``v̇_x = (F_xf + F_xr)/m + v_y ψ̇``,
+        ``v̇_y = (F_yf + F_yr)/m − v_x ψ̇``.
+
+    Examples
+    --------
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> x = np.array([0.0, 0.0, 0.0, 0.0, 10.0, 0.0])
+    >>> xd = frenet_bicycle_dynamics(x, np.zeros(3), 0.0, 1e5, TRUCK)
+    >>> float(xd[State.s])
+    10.0
+    """
+    sin, cos, _, stack = _ops(x, u, curvature_1pm)
+    d, dpsi, psidot = x[State.d], x[State.dpsi], x[State.psidot]
+    vx, vy = x[State.vx], x[State.vy]
+    fyf, fxf, fxr = u[Input.fyf], u[Input.fxf], u[Input.fxr]
+    fyr = rear_lateral_force_n(x, rear_stiffness_n_per_rad, params)
+    m = params.mass_kg
+
+    s_dot = (vx * cos(dpsi) - vy * sin(dpsi)) / (1.0 - d * curvature_1pm)
+    d_dot = vx * sin(dpsi) + vy * cos(dpsi)
+    dpsi_dot = psidot - curvature_1pm * s_dot
+    psi_ddot = (
+        params.cog_to_front_axle_m * fyf - params.cog_to_rear_axle_m * fyr
+    ) / params.yaw_inertia_kgm2
+    vx_dot = (fxf + fxr) / m + vy * psidot
+    vy_dot = (fyf + fyr) / m - vx * psidot
+    return stack([s_dot, d_dot, dpsi_dot, psi_ddot, vx_dot, vy_dot])

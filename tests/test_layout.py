@@ -1,0 +1,63 @@
+"""The package layout is the data flow: imports point upstream only."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "mufusion"
+ORDER = [
+    "road",
+    "vehicle",
+    "estimators",
+    "fusion",
+    "planner",
+    "sim",
+    "scenarios",
+    "metrics",
+    "plots",
+    "cli",
+]
+RANK = {name: i for i, name in enumerate(ORDER)}
+# Stages at the end of the pipeline that sit side by side: none of them may import another's
+# downstream sibling (metrics never import plots; nothing imports plots or cli).
+SIDE_BY_SIDE = {"scenarios", "metrics"}
+
+
+def _stage(path: Path) -> str | None:
+    rel = path.relative_to(SRC).parts
+    head = rel[0].removesuffix(".py")
+    return head if head in RANK else None
+
+
+def _imported_stages(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text())
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        names: list[str] = []
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names = [node.module]
+        for name in names:
+            parts = name.split(".")
+            if parts[0] == "mufusion" and len(parts) > 1 and parts[1] in RANK:
+                found.add(parts[1])
+    return found
+
+
+FILES = [p for p in SRC.rglob("*.py") if _stage(p) is not None]
+
+
+@pytest.mark.parametrize("path", FILES, ids=lambda p: str(p.relative_to(SRC)))
+def test_imports_point_upstream(path: Path) -> None:
+    own = _stage(path)
+    for other in _imported_stages(path):
+        if other == own:
+            continue
+        assert other not in {"plots", "cli"}, f"{path}: nothing may import mufusion.{other}"
+        if own in SIDE_BY_SIDE and other in SIDE_BY_SIDE:
+            continue
+        assert RANK[other] < RANK[own], f"{path} ({own}) imports downstream stage {other}"
