@@ -9,8 +9,9 @@ heading error ``dpsi`` [rad], yaw rate ``psidot`` [rad/s], body velocities ``vx`
 
 Input ``u`` (indexed by :class:`Input`): front lateral force ``fyf``, front and rear longitudinal
 forces ``fxf``, ``fxr`` [N], all in the vehicle body frame. The rear lateral force is not free: it
-follows the rear slip angle through a linear rear tire, ``F_yr = C_r (l_r ψ̇ − v_y) / v_x``, as in the
-authors' planner; the friction polygons then bound the whole rear force pair ``(F_xr, F_yr)``.
+follows the rear slip angle through a linear rear tire,
+``F_yr = C_r (l_r ψ̇ − v_y) / v_x``, as in the authors' planner; the friction
+polygons then bound the whole rear force pair ``(F_xr, F_yr)``.
 """
 
 from __future__ import annotations
@@ -118,7 +119,8 @@ def frenet_bicycle_dynamics(
     Returns
     -------
     x_dot
-        Same shape as ``x``: ``ṡ = (v_x cosΔψ − v_y sinΔψ)/(1 − dκ)``, ``ḋ = v_x sinΔψ + v_y cosΔψ``,
+        Same shape as ``x``: ``ṡ = (v_x cosΔψ − v_y sinΔψ)/(1 − dκ)``,
+        ``ḋ = v_x sinΔψ + v_y cosΔψ``,
         ``Δψ̇ = ψ̇ − κṡ``, ``ψ̈ = (l_f F_yf − l_r F_yr)/I_z``, ``v̇_x = (F_xf + F_xr)/m + v_y ψ̇``,
         ``v̇_y = (F_yf + F_yr)/m − v_x ψ̇``.
 
