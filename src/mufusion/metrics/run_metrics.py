@@ -1,0 +1,148 @@
+"""Per-run metrics, computed from a :class:`~mufusion.sim.log.RunLog` only (never the live loop)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from mufusion.sim.log import RunLog
+
+
+@dataclass(frozen=True)
+class RunMetrics:
+    """The outcome of one run, as reported in ``summary.json``.
+
+    Attributes
+    ----------
+    collision
+        Whether the vehicle's footprint ever overlapped an obstacle.
+    impact_speed_mps
+        Speed at the first contact, ``None`` without collision.
+    min_clearance_m
+        Smallest footprint-to-obstacle distance while passing it; ``None`` if the vehicle never
+        passed the obstacle (no obstacle, collision, or run ended before it).
+    max_abs_lateral_offset_m
+        Largest ``|d|`` of the vehicle's reference point from the ego-lane centre.
+    left_lane, entered_opposing_lane
+        Whether any corner of the footprint left the ego lane / entered the opposing lane.
+    planned_utilization_at_comparison
+        Largest planned front-force utilisation ``|F_f| / F_zf`` over the plan made at the
+        comparison instant (the paper's Fig. 3k / 4k); ``None`` if no plan was made then.
+    utilization_vs_gt
+        ``planned_utilization_at_comparison`` relative to the GT run's, minus one (paper: −32.6 %
+        for P, −5.6 % for F); filled in by :func:`attach_gt_comparison`.
+    max_force_excess
+        Largest planned tire force above the true limit ``μ_gt(s_k) F_z,k``, as a fraction of that
+        limit (0 when every planned force was physically available).
+    planner_median_ms, planner_p99_ms
+        Wall-clock time per planning step.
+    fallbacks
+        Planning steps that fell back to the shifted previous plan or a braking plan.
+    sampling_reinits
+        Planning steps whose initial guess came from the sampling augmentation.
+    """
+
+    collision: bool
+    impact_speed_mps: float | None
+    min_clearance_m: float | None
+    max_abs_lateral_offset_m: float
+    left_lane: bool
+    entered_opposing_lane: bool
+    planned_utilization_at_comparison: float | None
+    utilization_vs_gt: float | None
+    max_force_excess: float
+    planner_median_ms: float | None
+    planner_p99_ms: float | None
+    fallbacks: int
+    sampling_reinits: int
+    final_speed_mps: float
+    duration_s: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: _clean(v) for k, v in asdict(self).items()}
+
+
+def _clean(v: Any) -> Any:
+    if isinstance(v, float | np.floating):
+        return None if not math.isfinite(float(v)) else round(float(v), 6)
+    if isinstance(v, np.bool_):
+        return bool(v)
+    if isinstance(v, np.integer):
+        return int(v)
+    return v
+
+
+def _planned_utilization(plans: pd.DataFrame, t_c: float) -> float | None:
+    if plans.empty:
+        return None
+    step_times = plans["t_s"].unique()
+    idx = int(np.argmin(np.abs(step_times - t_c)))
+    plan = plans[plans["t_s"] == step_times[idx]]
+    force = np.hypot(plan["fxf_n"].to_numpy(), plan["fyf_n"].to_numpy())
+    return float(np.max(force / plan["fzf_n"].to_numpy()))
+
+
+def _max_force_excess(plans: pd.DataFrame) -> float:
+    if plans.empty:
+        return 0.0
+    front = np.hypot(plans["fxf_n"], plans["fyf_n"]) / (plans["mu_true"] * plans["fzf_n"])
+    rear = np.hypot(plans["fxr_n"], plans["fyr_n"]) / (plans["mu_true"] * plans["fzr_n"])
+    return float(max(0.0, np.nanmax(np.maximum(front, rear)) - 1.0))
+
+
+def compute_metrics(log: RunLog) -> RunMetrics:
+    """Compute the run's metrics from its log.
+
+    Raises
+    ------
+    ValueError
+        If the log has no time series (an empty or foreign log).
+    """
+    ts = log.timeseries
+    if ts.empty:
+        raise ValueError("log has no timeseries rows: nothing to measure")
+    collided = ts["in_collision"].astype(bool).to_numpy()
+    collision = bool(collided.any())
+    impact = float(ts["speed_mps"].to_numpy()[np.argmax(collided)]) if collision else None
+
+    min_clearance = None
+    if not collision and "passed_obstacle" in ts and ts["passed_obstacle"].astype(bool).any():
+        clearance = ts["clearance_m"].to_numpy(dtype=float)
+        if np.isfinite(clearance).any():
+            min_clearance = float(np.nanmin(clearance))
+
+    timing = log.timing
+    steps = log.planning_steps
+    t_c = float(log.meta.get("comparison_time_s", 0.0))
+    return RunMetrics(
+        collision=collision,
+        impact_speed_mps=impact,
+        min_clearance_m=min_clearance,
+        max_abs_lateral_offset_m=float(np.max(np.abs(ts["d_m"]))),
+        left_lane=bool(ts["left_lane"].astype(bool).any()),
+        entered_opposing_lane=bool(ts["in_opposing_lane"].astype(bool).any()),
+        planned_utilization_at_comparison=_planned_utilization(log.plans, t_c),
+        utilization_vs_gt=None,
+        max_force_excess=_max_force_excess(log.plans),
+        planner_median_ms=float(np.median(timing["step_ms"])) if not timing.empty else None,
+        planner_p99_ms=(
+            float(np.percentile(timing["step_ms"], 99)) if not timing.empty else None
+        ),
+        fallbacks=int(steps["fallback"].astype(bool).sum()) if not steps.empty else 0,
+        sampling_reinits=(
+            int(steps["sampled_reinit"].astype(bool).sum()) if not steps.empty else 0
+        ),
+        final_speed_mps=float(ts["speed_mps"].iloc[-1]),
+        duration_s=float(ts["t_s"].iloc[-1]),
+    )
+
+
+def attach_gt_comparison(metrics: RunMetrics, gt: RunMetrics) -> RunMetrics:
+    """Return ``metrics`` with ``utilization_vs_gt`` set from the same scenario's GT run."""
+    ours, ref = metrics.planned_utilization_at_comparison, gt.planned_utilization_at_comparison
+    ratio = None if ours is None or not ref else ours / ref - 1.0
+    return RunMetrics(**{**asdict(metrics), "utilization_vs_gt": ratio})
