@@ -176,8 +176,9 @@ def _raw_scenario(name_or_path: str | Path) -> tuple[dict[str, Any], str]:
 
 def _parse_value(text: str) -> Any:
     # TOML/JSON literals first (numbers, booleans, quoted strings, arrays); a bare word is a string.
+    # "none" is a value of the error-model fields; only "null" clears an optional field.
     lowered = text.strip()
-    if lowered in ("null", "none", "None"):
+    if lowered == "null":
         return None
     try:
         return json.loads(lowered)
