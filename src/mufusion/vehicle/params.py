@@ -69,6 +69,10 @@ class VehicleParams:
     max_brake_torque_front_nm: float
     max_brake_torque_rear_nm: float
     tire: TireParams
+    # Actuator lags of the plant (the planner ignores them): first-order steering servo (also
+    # rate-limited by ``max_steer_rate_radps``) and first-order wheel-torque build-up.
+    steer_time_constant_s: float = 0.05
+    torque_time_constant_s: float = 0.1
     source: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -85,6 +89,15 @@ class VehicleParams:
                 not math.isfinite(value) or value <= 0.0
             ):
                 raise ValueError(f"TireParams.{f.name} must be a finite number > 0, got {value!r}")
+        for name in ("shape_lateral", "shape_longitudinal"):
+            # C ≥ 2 would let the Magic Formula change sign at large slip.
+            value = getattr(self.tire, name)
+            if not value < 2.0:
+                raise ValueError(f"TireParams.{name} must be in (0, 2), got {value!r}")
+        for name in ("curvature_lateral", "curvature_longitudinal"):
+            value = getattr(self.tire, name)
+            if not (math.isfinite(value) and value <= 1.0):
+                raise ValueError(f"TireParams.{name} must be finite and <= 1, got {value!r}")
 
     @property
     def wheelbase_m(self) -> float:
@@ -130,6 +143,8 @@ TRUCK = VehicleParams(
     max_drive_torque_nm=25_000.0,
     max_brake_torque_front_nm=40_000.0,
     max_brake_torque_rear_nm=30_000.0,
+    # Pneumatic brakes build up torque in ≈ 0.2-0.3 s; a 0.15 s lag stands for brake and drive.
+    torque_time_constant_s=0.15,
     tire=TireParams(
         # Truck tires: cornering coefficient ≈ 7/rad, longitudinal ≈ 12 (heavy-vehicle tire data,
         # Pacejka "Tire and Vehicle Dynamics" ch. 4; Wong "Theory of Ground Vehicles" Tab. 1.5).
@@ -149,34 +164,38 @@ TRUCK = VehicleParams(
 )
 
 # CommonRoad vehicle parameter set 2 (BMW 320i), commonroad-vehicle-models 3.0.2,
-# `parameters_vehicle2()`; tire stiffness from its PAC2002 coefficients at nominal load.
+# `parameters_vehicle2()`: m, a, b, I_z, h_cg, w, l, R_w, I_y_w, steering limits and the PAC2002
+# pure-slip tire coefficients (p_ky1, p_kx1, p_cy1, p_cx1, p_ey1, p_ex1). The track is the mean of
+# T_f and T_r. The peak factors p_dy1 ≈ 1.05, p_dx1 ≈ 1.17 are not copied: here the peak is μ F_z.
 CAR = VehicleParams(
     name="car",
     mass_kg=1093.2952334674046,
-    yaw_inertia_kgm2=1791.6,
-    cog_to_front_axle_m=1.156,
-    cog_to_rear_axle_m=1.422,
-    cog_height_m=0.574,
-    width_m=1.674,
+    yaw_inertia_kgm2=1791.5995300122856,
+    cog_to_front_axle_m=1.1561957064,
+    cog_to_rear_axle_m=1.4227170936,
+    cog_height_m=0.5748689544,
+    width_m=1.61,
     length_m=4.508,
-    track_width_m=1.5,
+    track_width_m=0.5 * (1.38684 + 1.36398),
     wheel_radius_m=0.344,
     wheel_inertia_kgm2=1.7,
-    max_steer_rad=0.91,
-    max_steer_rate_radps=0.8,
+    max_steer_rad=1.066,
+    max_steer_rate_radps=0.4,
+    # Hydraulic brakes and the 11.5 m/s² CommonRoad acceleration limit (m R_w a ≈ 4.3 kN m).
     max_drive_torque_nm=3_000.0,
     max_brake_torque_front_nm=4_000.0,
     max_brake_torque_rear_nm=2_500.0,
+    torque_time_constant_s=0.05,
     tire=TireParams(
-        cornering_stiffness_per_load_1_per_rad=16.0,
-        longitudinal_stiffness_per_load=20.0,
-        shape_lateral=1.9,
-        shape_longitudinal=1.65,
-        curvature_lateral=0.97,
-        curvature_longitudinal=0.0,
-        source="CommonRoad parameters_vehicle2 PAC2002 tire, stiffness at nominal load",
+        cornering_stiffness_per_load_1_per_rad=21.92,
+        longitudinal_stiffness_per_load=22.303,
+        shape_lateral=1.3507,
+        shape_longitudinal=1.6411,
+        curvature_lateral=-0.0074722,
+        curvature_longitudinal=0.46403,
+        source="CommonRoad parameters_vehicle2 PAC2002: |p_ky1|, p_kx1, p_cy1, p_cx1, p_ey1, p_ex1",
     ),
-    source="CommonRoad vehicle models, parameter set 2 (BMW 320i)",
+    source="CommonRoad vehicle models 3.0.2, parameter set 2 (BMW 320i)",
 )
 
 PRESETS: dict[str, VehicleParams] = {"truck": TRUCK, "car": CAR}
