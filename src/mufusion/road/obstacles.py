@@ -1,0 +1,115 @@
+"""Obstacles: road-aligned rectangles at (s, d) that may pop up when the ego vehicle arrives.
+
+Geometry is evaluated in the Cartesian plane: an obstacle is the rectangle centred at the
+Cartesian image of its ``(s, d)``, aligned with the path heading there; the ego footprint is the
+oriented rectangle of the vehicle pose. Clearance is their exact signed distance
+(:func:`~mufusion.road.geometry.signed_clearance_m`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mufusion.road.geometry import rectangle_corners, signed_clearance_m
+from mufusion.road.path import ReferencePath
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A static rectangular obstacle and its trigger.
+
+    Attributes
+    ----------
+    s_m, d_m
+        Centre in Frenet coordinates [m].
+    length_m, width_m
+        Size along and across the road [m], > 0.
+    appear_at_ego_s_m
+        The obstacle appears once the ego progress reaches this value [m] (None: no such trigger).
+    appear_at_time_s
+        The obstacle appears at this time [s] (None: no such trigger). Without any trigger it is
+        present from the start; with both, whichever comes first.
+    """
+
+    s_m: float
+    d_m: float
+    length_m: float = 1.0
+    width_m: float = 1.0
+    appear_at_ego_s_m: float | None = None
+    appear_at_time_s: float | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("s_m", "d_m"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"Obstacle.{name} must be finite, got {getattr(self, name)!r}")
+        for name in ("length_m", "width_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"Obstacle.{name} must be finite and > 0, got {value!r}")
+
+    @classmethod
+    def pop_up(
+        cls, s_m: float, d_m: float, distance_ahead_m: float, length_m: float = 1.0,
+        width_m: float = 1.0,
+    ) -> Obstacle:
+        """The paper's pop-up obstacle: appears when the ego is ``distance_ahead_m`` before it."""
+        return cls(s_m, d_m, length_m, width_m, appear_at_ego_s_m=s_m - distance_ahead_m)
+
+
+def obstacle_active(
+    obstacle: Obstacle, ego_s_m: np.ndarray | float, time_s: np.ndarray | float
+) -> np.ndarray:
+    """Whether ``obstacle`` is present for ego progress ``ego_s_m`` [m] at ``time_s`` [s].
+
+    Examples
+    --------
+    >>> obstacle_active(Obstacle.pop_up(100.0, 0.0, 20.0), np.array([70.0, 80.0]), 0.0).tolist()
+    [False, True]
+    """
+    s, t = np.broadcast_arrays(np.asarray(ego_s_m, float), np.asarray(time_s, float))
+    if obstacle.appear_at_ego_s_m is None and obstacle.appear_at_time_s is None:
+        return np.ones(s.shape, dtype=bool)
+    active = np.zeros(s.shape, dtype=bool)
+    if obstacle.appear_at_ego_s_m is not None:
+        active |= s >= obstacle.appear_at_ego_s_m
+    if obstacle.appear_at_time_s is not None:
+        active |= t >= obstacle.appear_at_time_s
+    return active
+
+
+def obstacle_corners(obstacle: Obstacle, path: ReferencePath) -> np.ndarray:
+    """Cartesian corners of the obstacle, shape ``(4, 2)``."""
+    x, y, heading = path.to_cartesian(obstacle.s_m, obstacle.d_m, 0.0)
+    return rectangle_corners(x, y, heading, obstacle.length_m, obstacle.width_m)
+
+
+def footprint_clearance_m(
+    obstacle: Obstacle,
+    path: ReferencePath,
+    x_m: np.ndarray | float,
+    y_m: np.ndarray | float,
+    heading_rad: np.ndarray | float,
+    length_m: float,
+    width_m: float,
+) -> np.ndarray:
+    """Signed clearance [m] between ego footprints (Cartesian poses) and the obstacle.
+
+    Parameters
+    ----------
+    obstacle, path
+        The obstacle and the path that places it.
+    x_m, y_m, heading_rad
+        Footprint centre [m] and heading [rad]; broadcast to a batch shape ``B``.
+    length_m, width_m
+        Footprint size [m].
+
+    Returns
+    -------
+    ndarray
+        Shape ``B``: > 0 distance when apart, < 0 minus the penetration depth when colliding.
+    """
+    ego = rectangle_corners(x_m, y_m, heading_rad, length_m, width_m)
+    return signed_clearance_m(ego, obstacle_corners(obstacle, path))
