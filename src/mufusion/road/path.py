@@ -12,6 +12,7 @@ that overshoots still has well-defined Frenet coordinates.
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -19,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 _ANCHOR_SPACING_M = 2.0
+# Up to this many points, to_frenet loops over plain floats (faster than numpy for few points).
+_SCALAR_PATH_MAX_POINTS = 8
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(8)
 
 
@@ -128,11 +131,20 @@ class ReferencePath:
         table = np.arange(-20.0, self.length_m + 20.0, 0.5)
         self._table_s = table
         self._table_xy = np.stack(self.position(table), axis=-1)
+        self._table_heading = self.heading(table)
+        # Plain-float copies for the scalar path used by the control loop (one pose at a time,
+        # where numpy's per-call overhead would dominate).
+        self._py = (
+            self._seg_start.tolist(), self._k0.tolist(), self._dk.tolist(), self._psi0.tolist(),
+            self._anchor_s.tolist(), self._anchor_xy.tolist(),
+            list(zip(_GL_NODES.tolist(), _GL_WEIGHTS.tolist(), strict=True)),
+        )
 
     # --- curvature and heading: closed form per segment -------------------------------------
     def _segment_index(self, s: np.ndarray) -> np.ndarray:
         index = np.searchsorted(self._seg_start, s, side="right") - 1
-        return np.clip(index, 0, len(self.segments) - 1)
+        # np.minimum/np.maximum: much cheaper than np.clip on the small arrays of the control loop.
+        return np.maximum(np.minimum(index, len(self.segments) - 1), 0)
 
     def curvature(self, s_m: np.ndarray | float) -> np.ndarray:
         """Path curvature κ(s) [1/m], left positive; 0 on the straight extensions."""
@@ -145,36 +157,86 @@ class ReferencePath:
     def heading(self, s_m: np.ndarray | float) -> np.ndarray:
         """Path heading ψ_path(s) [rad] (continuous, not wrapped)."""
         s = np.asarray(s_m, dtype=float)
-        clamped = np.clip(s, 0.0, self.length_m)
+        clamped = np.maximum(np.minimum(s, self.length_m), 0.0)
         i = self._segment_index(clamped)
         sigma = clamped - self._seg_start[i]
         return self._psi0[i] + self._k0[i] * sigma + 0.5 * self._dk[i] * sigma**2
 
-    def _integrate(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    def _integrate(
+        self, a: np.ndarray, b: np.ndarray, segment: np.ndarray | None = None
+    ) -> np.ndarray:
         """∫_a^b (cos ψ, sin ψ) ds for a, b inside one segment; returns shape (2, n)."""
         half = 0.5 * (b - a)
         nodes = 0.5 * (a + b)[:, None] + half[:, None] * _GL_NODES[None, :]
-        i = self._segment_index(0.5 * (a + b))[:, None]
+        i = (self._segment_index(0.5 * (a + b)) if segment is None else segment)[:, None]
         sigma = nodes - self._seg_start[i]
         psi = self._psi0[i] + self._k0[i] * sigma + 0.5 * self._dk[i] * sigma**2
         return np.stack(
             [half * (np.cos(psi) @ _GL_WEIGHTS), half * (np.sin(psi) @ _GL_WEIGHTS)]
         )
 
+    def _frame(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
+        """x, y, heading and curvature at 1-D ``s`` with one segment lookup (Newton loop)."""
+        clamped = np.maximum(np.minimum(s, self.length_m), 0.0)
+        i = self._segment_index(clamped)
+        j = np.maximum(
+            np.minimum(np.searchsorted(self._anchor_s, clamped, side="right") - 1,
+                       self._anchor_s.size - 2), 0
+        )
+        # An anchor never lies in a later segment than the point it serves.
+        xy = self._anchor_xy[j].T + self._integrate(self._anchor_s[j], clamped, i)
+        sigma = clamped - self._seg_start[i]
+        heading = self._psi0[i] + self._k0[i] * sigma + 0.5 * self._dk[i] * sigma**2
+        beyond = s - clamped
+        inside = beyond == 0.0
+        kappa = np.where(inside, self._k0[i] + self._dk[i] * sigma, 0.0)
+        xy[0] += beyond * np.cos(heading)
+        xy[1] += beyond * np.sin(heading)
+        return xy[0], xy[1], heading, kappa
+
+    def _frame_scalar(self, s: float) -> tuple[float, float, float, float]:
+        """Plain-float version of :meth:`_frame` for one point."""
+        seg_start, k0s, dks, psi0s, anchor_s, anchor_xy, gauss = self._py
+        clamped = min(max(s, 0.0), self.length_m)
+        i = min(max(bisect.bisect_right(seg_start, clamped) - 1, 0), len(k0s) - 1)
+        j = min(max(bisect.bisect_right(anchor_s, clamped) - 1, 0), len(anchor_s) - 2)
+        start, k0, dk, psi0 = seg_start[i], k0s[i], dks[i], psi0s[i]
+        a = anchor_s[j]
+        half, mid = 0.5 * (clamped - a), 0.5 * (clamped + a)
+        x, y = anchor_xy[j]
+        for node, weight in gauss:
+            sigma = mid + half * node - start
+            psi = psi0 + k0 * sigma + 0.5 * dk * sigma * sigma
+            x += half * weight * math.cos(psi)
+            y += half * weight * math.sin(psi)
+        sigma = clamped - start
+        heading = psi0 + k0 * sigma + 0.5 * dk * sigma * sigma
+        beyond = s - clamped
+        kappa = k0 + dk * sigma if beyond == 0.0 else 0.0
+        return x + beyond * math.cos(heading), y + beyond * math.sin(heading), heading, kappa
+
+    def _to_frenet_scalar(self, px: float, py: float) -> tuple[float, float]:
+        k = int(np.argmin((self._table_xy[:, 0] - px) ** 2 + (self._table_xy[:, 1] - py) ** 2))
+        heading = float(self._table_heading[k])
+        s = float(self._table_s[k]) + (px - self._table_xy[k, 0]) * math.cos(heading) + (
+            py - self._table_xy[k, 1]
+        ) * math.sin(heading)
+        for _ in range(30):
+            cx, cy, heading, kappa = self._frame_scalar(s)
+            tx, ty = math.cos(heading), math.sin(heading)
+            ex, ey = px - cx, py - cy
+            step = (ex * tx + ey * ty) / max(1.0 - kappa * (-ex * ty + ey * tx), 0.1)
+            s += step
+            if abs(step) < 1e-9:
+                break
+        cx, cy, heading, _ = self._frame_scalar(s)
+        return s, -(px - cx) * math.sin(heading) + (py - cy) * math.cos(heading)
+
     def position(self, s_m: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """Cartesian centreline point at progress ``s_m`` [m]; returns ``(x, y)`` arrays."""
         s = np.asarray(s_m, dtype=float)
-        flat = s.reshape(-1)
-        clamped = np.clip(flat, 0.0, self.length_m)
-        j = np.clip(np.searchsorted(self._anchor_s, clamped, side="right") - 1, 0,
-                    self._anchor_s.size - 2)
-        xy = self._anchor_xy[j].T + self._integrate(self._anchor_s[j], clamped)
-        # Straight extensions beyond the ends.
-        beyond = flat - clamped
-        before, after = np.minimum(beyond, 0.0), np.maximum(beyond, 0.0)
-        xy[0] += before * math.cos(self.start_heading_rad) + after * math.cos(self.end_heading_rad)
-        xy[1] += before * math.sin(self.start_heading_rad) + after * math.sin(self.end_heading_rad)
-        return xy[0].reshape(s.shape), xy[1].reshape(s.shape)
+        x, y, _, _ = self._frame(s.reshape(-1))
+        return x.reshape(s.shape), y.reshape(s.shape)
 
     # --- Frenet <-> Cartesian -------------------------------------------------------------------
     def to_cartesian(
@@ -228,6 +290,13 @@ class ReferencePath:
         )
         shape = x.shape
         px, py = x.reshape(-1), y.reshape(-1)
+        if px.size <= _SCALAR_PATH_MAX_POINTS:
+            pairs = [self._to_frenet_scalar(a, b) for a, b in zip(px.tolist(), py.tolist(),
+                                                                 strict=True)]
+            s = np.array([p[0] for p in pairs])
+            d = np.array([p[1] for p in pairs])
+            dpsi = np.angle(np.exp(1j * (psi.reshape(-1) - self.heading(s))))
+            return s.reshape(shape), d.reshape(shape), dpsi.reshape(shape)
         nearest = np.empty(px.size, dtype=int)
         chunk = 2048
         for start in range(0, px.size, chunk):
@@ -236,19 +305,18 @@ class ReferencePath:
             nearest[start : start + chunk] = np.argmin(dx * dx + dy * dy, axis=1)
         s = self._table_s[nearest]
         for _ in range(30):
-            cx, cy = self.position(s)
-            heading = self.heading(s)
+            cx, cy, heading, kappa = self._frame(s)
             tx, ty = np.cos(heading), np.sin(heading)
             ex, ey = px - cx, py - cy
             along = ex * tx + ey * ty
-            across = -ex * ty + ey * tx
+            d = -ex * ty + ey * tx
             # Foot point condition (P − C(s))·t(s) = 0; its derivative is −(1 − κ d).
-            step = along / np.maximum(1.0 - self.curvature(s) * across, 0.1)
+            step = along / np.maximum(1.0 - kappa * d, 0.1)
             s = s + step
-            if np.all(np.abs(step) < 1e-11):
+            if np.all(np.abs(step) < 1e-9):
                 break
-        cx, cy = self.position(s)
-        heading = self.heading(s)
+        # One more evaluation at the converged foot point (the last step was < 1e-9 m).
+        cx, cy, heading, _ = self._frame(s)
         d = -(px - cx) * np.sin(heading) + (py - cy) * np.cos(heading)
         dpsi = np.angle(np.exp(1j * (psi.reshape(-1) - heading)))
         return s.reshape(shape), d.reshape(shape), dpsi.reshape(shape)
