@@ -1,0 +1,108 @@
+"""Top-view snapshots of runs at chosen positions (the paper's Fig. 3a-h and Fig. 4a-h)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from mufusion.plots._common import (
+    FRICTION_NORM,
+    config_color,
+    config_name,
+    draw_obstacles,
+    draw_plan,
+    draw_road,
+    draw_vehicle,
+    plan_at,
+    require_logs,
+    row_at_position,
+    save_figure,
+)
+from mufusion.sim.log import RunLog
+
+# Smallest half-width of a panel [m]: keeps the lanes readable when the plan is short.
+_MIN_HALF_WINDOW_M = 12.0
+
+
+def build_snapshots_figure(logs: Sequence[RunLog], positions_m: Sequence[float]) -> Figure:
+    """The snapshot grid (rows = runs, columns = positions); see :func:`plot_snapshots`."""
+    logs = require_logs(logs)
+    positions = [float(p) for p in positions_m]
+    if not positions:
+        raise ValueError("positions_m must hold at least one position [m], got none")
+    rows = [[row_at_position(log, p) for p in positions] for log in logs]
+
+    n_rows, n_cols = len(logs), len(positions)
+    fig = Figure(figsize=(3.1 * n_cols + 1.0, 3.1 * n_rows + 0.4), layout="constrained")
+    axes = fig.subplots(n_rows, n_cols, squeeze=False)
+    surface = None
+    for r, log in enumerate(logs):
+        ts = log.timeseries
+        color = config_color(log, r)
+        for c, position in enumerate(positions):
+            ax = axes[r][c]
+            row = ts.iloc[rows[r][c]]
+            t = float(row["t_s"])
+            plan = plan_at(log, t)
+            points = np.array([[row["x_m"], row["y_m"]]], dtype=float)
+            if not plan.empty:
+                points = np.vstack([points, plan[["x_m", "y_m"]].to_numpy(dtype=float)])
+            lo, hi = points.min(axis=0), points.max(axis=0)
+            centre = 0.5 * (lo + hi)
+            half = max(_MIN_HALF_WINDOW_M, 0.5 * float(np.max(hi - lo)) + 3.0)
+            drawn = draw_road(ax, log.meta, (centre[0], centre[1]), half * np.sqrt(2))
+            surface = surface if drawn is None else drawn
+            draw_obstacles(ax, log.meta, t)
+            draw_plan(ax, plan, color)
+            draw_vehicle(ax, log.meta, row, color)
+            ax.set_xlim(centre[0] - half, centre[0] + half)
+            ax.set_ylim(centre[1] - half, centre[1] + half)
+            ax.set_aspect("equal", adjustable="box")
+            tag = " (collision)" if bool(row.get("in_collision", False)) else ""
+            ax.set_title(f"{config_name(log)}, s = {position:g} m{tag}", fontsize=10,
+                         color="darkred" if tag else "black")
+            ax.tick_params(labelsize=7)
+            if r == n_rows - 1:
+                ax.set_xlabel("x [m]", fontsize=8)
+            if c == 0:
+                ax.set_ylabel("y [m]", fontsize=8)
+    if surface is not None:
+        bar = fig.colorbar(surface, ax=axes, shrink=0.8, pad=0.01, aspect=30)
+        bar.set_label("true friction μ [-]")
+        bar.mappable.set_norm(FRICTION_NORM)
+    fig.suptitle("Top view: vehicle, planned trajectory (line with markers), obstacle (red)",
+                 fontsize=10)
+    return fig
+
+
+def plot_snapshots(logs: Sequence[RunLog], positions_m: Sequence[float], path: str | Path) -> Path:
+    """Top views of each run at chosen positions, like the paper's Fig. 3a-h / 4a-h.
+
+    Each panel shows the road around the vehicle (ego and opposing lane, surface coloured by the
+    true friction), the obstacle if it is active, the vehicle's footprint at the logged tick whose
+    progress is nearest the position, and the plan made nearest that instant.
+
+    Parameters
+    ----------
+    logs : sequence of RunLog
+        One row of panels per run (the paper: L vs F for the turn, P vs F for the pop-up).
+    positions_m : sequence of float
+        Progress from the run's start ``s - meta["start_s_m"]`` [m], one column each
+        (paper: turn 0, 15, 30, 55 m; pop-up 0, 2, 18, 40 m).
+    path : str or Path
+        Output PNG file.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        If ``logs`` or ``positions_m`` is empty, or a position lies outside a run's travelled range.
+    """
+    return save_figure(build_snapshots_figure(logs, positions_m), path)
