@@ -166,3 +166,18 @@ def test_footprint_is_the_oriented_rectangle() -> None:
     assert np.ptp(corners[:, 1]) == pytest.approx(4.0)
     assert np.ptp(corners[:, 0]) == pytest.approx(2.0)
     assert corners.mean(axis=0) == pytest.approx([1.0, 2.0])
+
+
+def test_a_run_that_ended_early_shows_its_last_tick(saved_log, tmp_path: Path) -> None:
+    # P collides and its run stops after ~1 s (about 19 m); F goes on to 40 m.
+    p = saved_log("popup", "P", duration_s=1.0, collision_at_s=18.0)
+    f = saved_log("popup", "F")
+    fig = build_snapshots_figure([p, f], [2.0, 40.0])
+    late = fig.axes[1]
+    (footprint,) = _by_gid(late, "footprint")
+    last = p.timeseries.iloc[-1]
+    assert footprint.get_xy()[:4].mean(axis=0) == pytest.approx([last["x_m"], last["y_m"]])
+    assert late.get_title().startswith("P, s = 40 m (collision)\n(run ended at 19 m)")
+    assert fig.axes[3].get_title() == "F, s = 40 m"
+    with pytest.raises(ValueError, match="position must lie within"):
+        plot_snapshots([p, f], [200.0], tmp_path / "x.png")

@@ -108,7 +108,7 @@ def _number(run: Mapping[str, Any], scenario: str, variant: str, config: str, cr
     delta = float(ours) - target
     ok = abs(delta) <= tolerance
     if as_percent:
-        diff_text = f"{100 * delta:+.1f} percentage points (tolerance ±{100 * tolerance:.0f})"
+        diff_text = f"{100 * delta:+.1f} percentage points (tolerance ±{100 * tolerance:.0f} pp)"
     else:
         diff_text = f"{delta:+.2f} {unit} (tolerance ±{tolerance:g} {unit})"
     return Verdict(scenario, variant, config, criterion, paper, f"{metric} = {show(ours)}",
@@ -196,11 +196,15 @@ def _tag(scenario: str, variant: str) -> str:
     return f"{scenario}-{''.join(c if c.isalnum() else '-' for c in variant)}".lower()
 
 
-def _caption(key: str) -> str:
-    kind = key.rsplit("/", 1)[-1]
-    text = _FIGURE_CAPTIONS.get(kind, "")
-    where = key.rsplit("/", 1)[0] if "/" in key else key
-    return f"{where}: {text}" if text else where
+def _caption(key: str, in_section: bool) -> str:
+    parts = key.split("/")
+    text = _FIGURE_CAPTIONS.get(parts[-1], "")
+    if not text:
+        return key
+    if in_section:
+        # "<tag>/<kind>" or "<tag>/<config>/animation": the section already names the tag.
+        return f"{parts[1]}: {text}" if len(parts) == 3 else text
+    return f"{'/'.join(parts[:-1])}: {text}"
 
 
 def _table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
@@ -254,7 +258,7 @@ def build_report_markdown(
     figure_number = 0
     used: set[str] = set()
 
-    def figure_lines(keys: Sequence[str]) -> list[str]:
+    def figure_lines(keys: Sequence[str], in_section: bool) -> list[str]:
         nonlocal figure_number
         lines: list[str] = []
         for key in keys:
@@ -262,7 +266,7 @@ def build_report_markdown(
             used.add(key)
             rel = Path(os.path.relpath(Path(figures[key]).resolve(), Path(out_dir).resolve()))
             lines += [f"![Figure {figure_number}]({rel.as_posix()})", "",
-                      f"*Figure {figure_number}: {_caption(key)}*", ""]
+                      f"*Figure {figure_number}: {_caption(key, in_section)}*", ""]
         return lines
 
     all_verdicts = [v for run in runs for v in compare_with_paper(run)]
@@ -298,7 +302,7 @@ def build_report_markdown(
                 md += [f"**{v.config}, {v.criterion} ({v.verdict}).** {text}", ""]
         keys = [k for k in figures if k.split("/", 1)[0] == _tag(scenario, variant)]
         if keys:
-            md += ["### Figures", "", *figure_lines(keys)]
+            md += ["### Figures", "", *figure_lines(keys, in_section=True)]
 
     md += ["## Safe fusion mode (F-safe)", ""]
     safe_groups = [(sv, g) for sv, g in groups.items() if any(r["config"] == "F-safe" for r in g)]
@@ -321,7 +325,7 @@ def build_report_markdown(
            ""]
     rest = [k for k in figures if k not in used]
     if rest:
-        md += ["## Other figures", "", *figure_lines(rest)]
+        md += ["## Other figures", "", *figure_lines(rest, in_section=False)]
     return "\n".join(md).rstrip() + "\n"
 
 

@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 
 from mufusion.plots._common import (
     FRICTION_NORM,
+    POSITION_TOLERANCE_M,
     config_color,
     config_name,
     draw_obstacles,
@@ -20,11 +21,35 @@ from mufusion.plots._common import (
     require_logs,
     row_at_position,
     save_figure,
+    start_s,
 )
 from mufusion.sim.log import RunLog
 
 # Smallest half-width of a panel [m]: keeps the lanes readable when the plan is short.
 _MIN_HALF_WINDOW_M = 12.0
+# Height / width of every panel: one shape for the whole grid, wide because roads run mostly
+# along the direction of travel.
+_PANEL_ASPECT = 0.65
+_MARGIN_M = 3.0
+
+
+def _snapshot_row(logs: list[RunLog], log: RunLog, position_m: float) -> int:
+    """Row of ``log`` nearest ``position_m``; its last row if the run ended before it.
+
+    A run that stops early (a collision ends it) still gets a panel showing its final state, as
+    long as another run reaches the position; a position no run reaches is an error.
+    """
+    try:
+        return row_at_position(log, position_m)
+    except ValueError:
+        if position_m < 0 or not any(_reaches(other, position_m) for other in logs):
+            raise
+        return len(log.timeseries) - 1
+
+
+def _reaches(log: RunLog, position_m: float) -> bool:
+    travelled = float(log.timeseries["s_m"].max()) - start_s(log)
+    return position_m <= travelled + POSITION_TOLERANCE_M
 
 
 def build_snapshots_figure(logs: Sequence[RunLog], positions_m: Sequence[float]) -> Figure:
@@ -33,10 +58,11 @@ def build_snapshots_figure(logs: Sequence[RunLog], positions_m: Sequence[float])
     positions = [float(p) for p in positions_m]
     if not positions:
         raise ValueError("positions_m must hold at least one position [m], got none")
-    rows = [[row_at_position(log, p) for p in positions] for log in logs]
+    rows = [[_snapshot_row(logs, log, p) for p in positions] for log in logs]
 
     n_rows, n_cols = len(logs), len(positions)
-    fig = Figure(figsize=(3.1 * n_cols + 1.0, 3.1 * n_rows + 0.4), layout="constrained")
+    fig = Figure(figsize=(3.4 * n_cols + 1.0, 3.4 * _PANEL_ASPECT * n_rows + 0.9),
+                 layout="constrained")
     axes = fig.subplots(n_rows, n_cols, squeeze=False)
     surface = None
     for r, log in enumerate(logs):
@@ -52,16 +78,21 @@ def build_snapshots_figure(logs: Sequence[RunLog], positions_m: Sequence[float])
                 points = np.vstack([points, plan[["x_m", "y_m"]].to_numpy(dtype=float)])
             lo, hi = points.min(axis=0), points.max(axis=0)
             centre = 0.5 * (lo + hi)
-            half = max(_MIN_HALF_WINDOW_M, 0.5 * float(np.max(hi - lo)) + 3.0)
-            drawn = draw_road(ax, log.meta, (centre[0], centre[1]), half * np.sqrt(2))
+            half_x = max(_MIN_HALF_WINDOW_M, 0.5 * float(hi[0] - lo[0]) + _MARGIN_M,
+                         (0.5 * float(hi[1] - lo[1]) + _MARGIN_M) / _PANEL_ASPECT)
+            half_y = _PANEL_ASPECT * half_x
+            drawn = draw_road(ax, log.meta, (centre[0], centre[1]), float(np.hypot(half_x, half_y)))
             surface = surface if drawn is None else drawn
             draw_obstacles(ax, log.meta, t)
             draw_plan(ax, plan, color)
             draw_vehicle(ax, log.meta, row, color)
-            ax.set_xlim(centre[0] - half, centre[0] + half)
-            ax.set_ylim(centre[1] - half, centre[1] + half)
+            ax.set_xlim(centre[0] - half_x, centre[0] + half_x)
+            ax.set_ylim(centre[1] - half_y, centre[1] + half_y)
             ax.set_aspect("equal", adjustable="box")
             tag = " (collision)" if bool(row.get("in_collision", False)) else ""
+            ended = float(row["s_m"]) - start_s(log)
+            if position > ended + POSITION_TOLERANCE_M:
+                tag += f"\n(run ended at {ended:.0f} m)"
             ax.set_title(f"{config_name(log)}, s = {position:g} m{tag}", fontsize=10,
                          color="darkred" if tag else "black")
             ax.tick_params(labelsize=7)
@@ -73,8 +104,9 @@ def build_snapshots_figure(logs: Sequence[RunLog], positions_m: Sequence[float])
         bar = fig.colorbar(surface, ax=axes, shrink=0.8, pad=0.01, aspect=30)
         bar.set_label("true friction μ [-]")
         bar.mappable.set_norm(FRICTION_NORM)
-    fig.suptitle("Top view: vehicle, planned trajectory (line with markers), obstacle (red)",
-                 fontsize=10)
+    with_obstacles = any(log.meta.get("obstacles") for log in logs)
+    fig.suptitle("Top view: vehicle, planned trajectory (line with markers)"
+                 + (", obstacle (red)" if with_obstacles else ""), fontsize=10)
     return fig
 
 
@@ -103,6 +135,8 @@ def plot_snapshots(logs: Sequence[RunLog], positions_m: Sequence[float], path: s
     Raises
     ------
     ValueError
-        If ``logs`` or ``positions_m`` is empty, or a position lies outside a run's travelled range.
+        If ``logs`` or ``positions_m`` is empty, or a position lies outside the travelled range
+        of every run. A run that ended before a position others reach is shown at its last
+        logged tick, tagged "(run ended at ... m)".
     """
     return save_figure(build_snapshots_figure(logs, positions_m), path)

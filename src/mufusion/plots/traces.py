@@ -22,7 +22,7 @@ from mufusion.sim.log import RunLog
 def build_traces_figure(logs: Sequence[RunLog]) -> Figure:
     """The two-panel figure of :func:`plot_lateral_and_speed`."""
     logs = require_logs(logs)
-    fig = Figure(figsize=(7.5, 5.2), layout="constrained")
+    fig = Figure(figsize=(8.5, 5.2), layout="constrained")
     ax_d, ax_v = fig.subplots(2, 1, sharex=True)
     for i, log in enumerate(logs):
         ts = log.timeseries
@@ -38,7 +38,7 @@ def build_traces_figure(logs: Sequence[RunLog]) -> Figure:
     ax_d.axhline(3 * w / 2, color="0.3", lw=1.0, ls="-")
     ax_d.axhline(0.0, color="0.7", lw=0.8, ls=":")
     # Label the boundaries at the right edge, inside the axes, so they never collide with data.
-    for level, text in ((-w / 2, "ego lane edge"), (w / 2, "opposing lane"),
+    for level, text in ((-w / 2, "ego lane edge"), (w / 2, "ego / opposing lane boundary"),
                         (3 * w / 2, "road edge")):
         ax_d.annotate(text, xy=(1.0, level), xycoords=("axes fraction", "data"),
                       xytext=(-3, 2), textcoords="offset points", ha="right", va="bottom",
@@ -58,13 +58,18 @@ def build_traces_figure(logs: Sequence[RunLog]) -> Figure:
                      label="obstacle position" if j == 0 else None)
 
     ax_d.set_ylabel("distance to lane centre d [m]")
-    ax_d.set_ylim(-w, 2 * w)
+    lowest = min(float(log.timeseries["d_m"].min()) for log in logs)
+    highest = max(float(log.timeseries["d_m"].max()) for log in logs)
+    ax_d.set_ylim(min(-w, lowest - 0.5), max(2 * w, highest + 0.5))
     ax_d.set_title("Lateral offset (left positive)", fontsize=10)
-    ax_d.legend(fontsize=8, loc="upper left", ncol=3)
+    # Legends outside the axes, so they never cover a trace.
+    ax_d.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     ax_v.set_ylabel("speed [m/s]")
     ax_v.set_xlabel("progress s from start [m]")
     ax_v.set_title("Speed", fontsize=10)
-    ax_v.legend(fontsize=8, loc="best", ncol=3)
+    if obstacles:
+        ax_v.legend(handles=[h for h in ax_v.get_lines() if h.get_gid() != "run"], fontsize=8,
+                    loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     for ax in (ax_d, ax_v):
         ax.grid(alpha=0.3)
     return fig
