@@ -1,0 +1,185 @@
+"""acados SQP_RTI backend: code generated once per problem hash and cached on disk."""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import json
+import logging
+
+import numpy as np
+
+from mufusion.planner.acados_loader import cache_dir, load_acados_template
+from mufusion.planner.ocp import N_PARAMS, Param, PlannerConfig, polygon_directions
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import (
+    N_INPUTS,
+    N_STATES,
+    Input,
+    State,
+    frenet_bicycle_dynamics,
+    rear_lateral_force_n,
+)
+
+_log = logging.getLogger(__name__)
+_FORMAT_VERSION = "1"
+
+
+def problem_hash(params: VehicleParams, config: PlannerConfig) -> str:
+    """Hash of everything that shapes the generated code."""
+    text = json.dumps(
+        {
+            "v": _FORMAT_VERSION,
+            "params": repr(params),
+            "N": config.horizon_steps,
+            "dt": config.dt_s,
+            "sides": config.polygon_sides,
+        },
+        sort_keys=True,
+    )
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def constraint_expressions(x, u, p, params: VehicleParams, n_sides: int):
+    """Friction polygons, normalised by their radii: ``h ≤ 0`` (front n rows, then rear n rows)."""
+    import casadi as ca
+
+    normals, ratio = polygon_directions(n_sides)
+    fyr = rear_lateral_force_n(x, p[Param.rear_stiffness], params)
+    front = [
+        (nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front] - ratio
+        for nx, ny in normals
+    ]
+    rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] - ratio for nx, ny in normals]
+    return ca.vertcat(*front, *rear)
+
+
+class AcadosBackend:
+    """One RTI iteration per call on the shared OCP description."""
+
+    def __init__(self, params: VehicleParams, config: PlannerConfig) -> None:
+        at = load_acados_template()
+        import casadi as ca
+
+        self.params, self.config = params, config
+        n, ns = config.horizon_steps, config.polygon_sides
+        digest = problem_hash(params, config)
+        export = cache_dir() / f"tamp_{digest}"
+        json_file = export / "ocp.json"
+        name = f"tamp_{digest}"
+
+        ocp = at.AcadosOcp()
+        model = at.AcadosModel()
+        model.name = name
+        x = ca.SX.sym("x", N_STATES)
+        u = ca.SX.sym("u", N_INPUTS)
+        p = ca.SX.sym("p", N_PARAMS)
+        model.x, model.u, model.p = x, u, p
+        model.xdot = ca.SX.sym("xdot", N_STATES)
+        f = frenet_bicycle_dynamics(x, u, p[Param.curvature], p[Param.rear_stiffness], params)
+        model.f_expl_expr = f
+        model.f_impl_expr = model.xdot - f
+        model.con_h_expr = constraint_expressions(x, u, p, params, ns)
+        ocp.model = model
+        ocp.dims.N = n
+        ocp.parameter_values = np.ones(N_PARAMS)
+
+        ny = N_STATES + N_INPUTS
+        ocp.cost.cost_type = "LINEAR_LS"
+        ocp.cost.cost_type_e = "LINEAR_LS"
+        ocp.cost.Vx = np.vstack([np.eye(N_STATES), np.zeros((N_INPUTS, N_STATES))])
+        ocp.cost.Vu = np.vstack([np.zeros((N_STATES, N_INPUTS)), np.eye(N_INPUTS)])
+        ocp.cost.Vx_e = np.eye(N_STATES)
+        ocp.cost.W = np.eye(ny)
+        ocp.cost.W_e = np.eye(N_STATES)
+        ocp.cost.yref = np.zeros(ny)
+        ocp.cost.yref_e = np.zeros(N_STATES)
+
+        ocp.constraints.x0 = np.array([0, 0, 0, 0, 10.0, 0])
+        ocp.constraints.idxbx = np.array([State.d, State.vx])
+        ocp.constraints.lbx = np.array([-1.0, 0.0])
+        ocp.constraints.ubx = np.array([1.0, 100.0])
+        ocp.constraints.idxsbx = np.array([0])
+        ocp.constraints.idxbx_e = np.array([State.d])
+        ocp.constraints.lbx_e = np.array([-1.0])
+        ocp.constraints.ubx_e = np.array([1.0])
+        ocp.constraints.idxsbx_e = np.array([0])
+        ocp.constraints.lh = np.full(2 * ns, -1e3)
+        ocp.constraints.uh = np.zeros(2 * ns)
+        # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
+        # follows the state, which at stage 0 is fixed, so the rear polygon is soft.
+        ocp.constraints.idxsh = np.arange(ns, 2 * ns)
+        w = config.weights
+        n_slack = 1 + ns
+        ocp.cost.zl = np.full(n_slack, w.slack_l1)
+        ocp.cost.zu = np.full(n_slack, w.slack_l1)
+        ocp.cost.Zl = np.full(n_slack, w.slack_l2)
+        ocp.cost.Zu = np.full(n_slack, w.slack_l2)
+        ocp.cost.zl_e = np.full(1, w.slack_l1)
+        ocp.cost.zu_e = np.full(1, w.slack_l1)
+        ocp.cost.Zl_e = np.full(1, w.slack_l2)
+        ocp.cost.Zu_e = np.full(1, w.slack_l2)
+
+        so = ocp.solver_options
+        so.tf = n * config.dt_s
+        so.nlp_solver_type = "SQP_RTI"
+        so.qp_solver = "PARTIAL_CONDENSING_HPIPM"
+        so.qp_solver_cond_N = max(1, n // 4)
+        so.hessian_approx = "GAUSS_NEWTON"
+        so.integrator_type = "ERK"
+        so.sim_method_num_stages = 4
+        so.sim_method_num_steps = 1
+        so.qp_solver_iter_max = 50
+        ocp.code_export_directory = str(export)
+
+        lib = export / "acados_ocp_solver_pyx.so"
+        if not lib.exists():
+            export.mkdir(parents=True, exist_ok=True)
+            _log.info("generating and compiling the acados solver in %s", export)
+            at.AcadosOcpSolver.generate(ocp, json_file=str(json_file))
+            at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
+        # The template imports the wrapper by a cwd-relative module path; load it by file instead.
+        spec = importlib.util.spec_from_file_location("acados_ocp_solver_pyx", lib)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        self.solver = module.AcadosOcpSolverCython(name, "SQP_RTI", n)
+
+    def solve(
+        self,
+        x0: np.ndarray,
+        guess_x: np.ndarray,
+        guess_u: np.ndarray,
+        p: np.ndarray,
+        yref: np.ndarray,
+        weights: np.ndarray,
+        d_lo: np.ndarray,
+        d_hi: np.ndarray,
+        min_speed_mps: float,
+    ) -> tuple[int, np.ndarray, np.ndarray]:
+        """One RTI step; returns ``(status, states (N+1, 6), inputs (N, 3))``."""
+        s = self.solver
+        n = self.config.horizon_steps
+        s.set(0, "lbx", x0)
+        s.set(0, "ubx", x0)
+        w_stage = np.diag(weights[: N_STATES + N_INPUTS])
+        for k in range(n):
+            s.set(k, "x", guess_x[k])
+            s.set(k, "u", guess_u[k])
+            s.set(k, "p", p[k])
+            s.cost_set(k, "yref", yref[k])
+            s.cost_set(k, "W", w_stage)
+            if k > 0:
+                s.constraints_set(k, "lbx", np.array([d_lo[k - 1], min_speed_mps]))
+                s.constraints_set(k, "ubx", np.array([d_hi[k - 1], 100.0]))
+        s.set(n, "x", guess_x[n])
+        s.set(n, "p", p[n - 1])
+        s.cost_set(n, "yref", yref[n][:N_STATES])
+        s.cost_set(n, "W", w_stage[:N_STATES, :N_STATES])
+        s.constraints_set(n, "lbx", np.array([d_lo[n - 1]]))
+        s.constraints_set(n, "ubx", np.array([d_hi[n - 1]]))
+        status = s.solve()
+        xs = np.array([s.get(k, "x") for k in range(n + 1)])
+        us = np.array([s.get(k, "u") for k in range(n)])
+        return int(status), xs, us
+
+

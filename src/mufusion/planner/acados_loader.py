@@ -1,0 +1,77 @@
+"""Load acados from the PyPI wheel ``comma-deps-acados``: the one place for its plumbing.
+
+The wheel's shared libraries carry no RUNPATH and its template expects three environment variables
+and a symlink inside the package (see docs/planner.md). :func:`load_acados_template` sets all of
+that up once and returns the ``acados_template`` module, or raises :class:`AcadosUnavailable`
+so the caller can fall back to the CasADi backend.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import logging
+import os
+from pathlib import Path
+from types import ModuleType
+
+_log = logging.getLogger(__name__)
+
+# Load order matters: each library needs the ones before it.
+_LIBRARIES = ("libblasfeo.so", "libhpipm.so", "libqpOASES_e.so", "libacados.so")
+
+
+class AcadosUnavailable(RuntimeError):
+    """acados cannot be used here (no wheel, missing libraries or compiler)."""
+
+
+def cache_dir() -> Path:
+    """Directory for generated solvers: ``$MUFUSION_CACHE_DIR`` or ``~/.cache/mufusion/acados``."""
+    env = os.environ.get("MUFUSION_CACHE_DIR")
+    return Path(env) if env else Path.home() / ".cache" / "mufusion" / "acados"
+
+
+@functools.lru_cache(maxsize=1)
+def load_acados_template() -> ModuleType:
+    """Prepare the environment and import ``acados_template``.
+
+    Returns
+    -------
+    module
+        The ``acados_template`` module.
+
+    Raises
+    ------
+    AcadosUnavailable
+        If the wheel is missing or its libraries cannot be loaded.
+    """
+    try:
+        import acados
+    except ImportError as exc:
+        raise AcadosUnavailable("the comma-deps-acados wheel is not installed") from exc
+    install = Path(acados.DIR)
+    os.environ.setdefault("ACADOS_SOURCE_DIR", str(install))
+    os.environ.setdefault("ACADOS_PYTHON_INTERFACE_PATH", str(acados.TEMPLATE_DIR))
+    os.environ.setdefault("TERA_PATH", str(acados.TERA_PATH))
+    try:
+        for name in _LIBRARIES:
+            ctypes.CDLL(str(install / "lib" / name), mode=ctypes.RTLD_GLOBAL)
+    except OSError as exc:
+        raise AcadosUnavailable(f"acados libraries failed to load: {exc}") from exc
+    # The Cython wrapper's build looks for the template under install/interfaces; a fresh venv
+    # (CI) lacks this link, so it is made here at run time.
+    link = install / "interfaces" / "acados_template" / "acados_template"
+    if not link.exists():
+        try:
+            link.parent.mkdir(parents=True, exist_ok=True)
+            link.symlink_to(Path("..") / ".." / ".." / "acados_template")
+        except OSError as exc:
+            raise AcadosUnavailable(f"cannot create {link}: {exc}") from exc
+    try:
+        import acados_template
+    except ImportError:
+        try:
+            from acados import acados_template  # type: ignore[no-redef]
+        except ImportError as exc:
+            raise AcadosUnavailable(f"acados_template import failed: {exc}") from exc
+    return acados_template

@@ -1,0 +1,165 @@
+"""Backend-independent description of the traction-adaptive OCP (Svensson & Törngren, Sec. II).
+
+Small factories assemble the pieces: per-stage parameters (curvature, rear stiffness, polygon
+radii),
+friction polygons, the lateral corridor from lanes and obstacles, and the cost weights.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from enum import IntEnum
+from typing import Literal
+
+import numpy as np
+
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import (
+    Input,
+    State,
+    normal_loads_n,
+    rear_cornering_stiffness_n_per_rad,
+)
+
+
+class Param(IntEnum):
+    """Per-stage parameter vector ``p``."""
+
+    curvature = 0
+    rear_stiffness = 1
+    radius_front = 2
+    radius_rear = 3
+
+
+N_PARAMS = len(Param)
+
+
+@dataclass(frozen=True)
+class CostWeights:
+    """Least-squares weights (acados multiplies them by dt)."""
+
+    speed: float = 1.0
+    lateral_offset: float = 0.5
+    heading_error: float = 1.0
+    yaw_rate: float = 1.0
+    lateral_speed: float = 1.0
+    force_per_kn: float = 1e-4
+    emergency_speed: float = 10.0
+    slack_l1: float = 1e4
+    slack_l2: float = 1e4
+
+
+@dataclass(frozen=True)
+class PlannerObstacle:
+    """An obstacle in road coordinates: centre ``(s_m, d_m)``, extent ``length_m × width_m``."""
+
+    s_m: float
+    d_m: float
+    length_m: float
+    width_m: float
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """Planner configuration; checked on construction."""
+
+    horizon_steps: int = 40
+    dt_s: float = 0.1
+    utilization_factor: float = 0.9
+    polygon_sides: int = 12
+    weights: CostWeights = field(default_factory=CostWeights)
+    backend: Literal["acados", "casadi"] = "acados"
+    use_sampling: bool = True
+    lane_d_min_m: float = -1.75
+    lane_d_max_m: float = 1.75
+    obstacle_margin_m: float = 0.5
+    min_speed_mps: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not 5 <= self.horizon_steps <= 200:
+            raise ValueError(f"horizon_steps must be in [5, 200], got {self.horizon_steps}")
+        if not 0.0 < self.dt_s <= 0.5:
+            raise ValueError(f"dt_s must be in (0, 0.5] s, got {self.dt_s}")
+        if not 0.0 < self.utilization_factor <= 1.0:
+            raise ValueError(
+                f"utilization_factor must be in (0, 1], got {self.utilization_factor}"
+            )
+        if self.polygon_sides < 12:
+            raise ValueError(f"polygon_sides must be >= 12, got {self.polygon_sides}")
+        if self.backend not in ("acados", "casadi"):
+            raise ValueError(f"backend must be 'acados' or 'casadi', got {self.backend!r}")
+        if self.lane_d_min_m >= self.lane_d_max_m:
+            raise ValueError("lane_d_min_m must be below lane_d_max_m")
+
+
+def polygon_directions(n_sides: int) -> tuple[np.ndarray, float]:
+    """Outward normals ``(n, 2)`` over ``(F_x, F_y)`` and the inscribed-radius ratio ``cos(π/n)``.
+
+    A regular n-gon inscribed in the circle of radius R is ``{f : n_j · f ≤ R cos(π/n)}``.
+    """
+    theta = 2.0 * np.pi * np.arange(n_sides) / n_sides
+    return np.stack([np.cos(theta), np.sin(theta)], axis=1), float(np.cos(np.pi / n_sides))
+
+
+def stage_parameters(
+    guess_states: np.ndarray,
+    guess_inputs: np.ndarray,
+    curvature_of_s,
+    mu_hat_of_s,
+    params: VehicleParams,
+    utilization_factor: float,
+) -> dict[str, np.ndarray]:
+    """Per-stage parameters from the initial guess (predicted ``s_k`` and ``a_x,k``).
+
+    Returns arrays of length N: ``mu_hat``, ``fzf``, ``fzr``, ``radius_front``, ``radius_rear``,
+    ``rear_stiffness``, ``curvature`` and the stacked ``p`` of shape ``(N, N_PARAMS)``.
+    """
+    s_k = guess_states[:-1, State.s]
+    ax = (guess_inputs[:, Input.fxf] + guess_inputs[:, Input.fxr]) / params.mass_kg
+    fzf, fzr = normal_loads_n(ax, params)
+    fzf = np.maximum(fzf, 0.05 * params.mass_kg * 9.81)
+    fzr = np.maximum(fzr, 0.05 * params.mass_kg * 9.81)
+    mu = np.clip(np.asarray(mu_hat_of_s(s_k), dtype=float), 0.05, 2.0)
+    kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
+    c_r = rear_cornering_stiffness_n_per_rad(params, fzr)
+    radius_front = utilization_factor * mu * fzf
+    radius_rear = utilization_factor * mu * fzr
+    p = np.zeros((s_k.size, N_PARAMS))
+    p[:, Param.curvature] = kappa
+    p[:, Param.rear_stiffness] = c_r
+    p[:, Param.radius_front] = radius_front
+    p[:, Param.radius_rear] = radius_rear
+    return {
+        "mu_hat": mu, "fzf": fzf, "fzr": fzr, "radius_front": radius_front,
+        "radius_rear": radius_rear, "rear_stiffness": c_r, "curvature": kappa, "p": p,
+    }
+
+
+def lateral_corridor(
+    guess_states: np.ndarray,
+    obstacles: Sequence[PlannerObstacle],
+    lane_d_min_m: float,
+    lane_d_max_m: float,
+    params: VehicleParams,
+    margin_m: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on the reference point's ``d`` per stage 1..N, shape ``(N,)`` each.
+
+    Lane edges shrink by half the vehicle width. An obstacle overlapping the vehicle's footprint at
+    the guess's predicted ``s_k`` closes the side opposite to the guess's ``d_k`` (pass left if the
+    guess is left of the obstacle's centre), which keeps the problem convex.
+    """
+    s_k = guess_states[1:, State.s]
+    d_k = guess_states[1:, State.d]
+    half_w = 0.5 * params.width_m
+    lo = np.full(s_k.shape, lane_d_min_m + half_w)
+    hi = np.full(s_k.shape, lane_d_max_m - half_w)
+    half_len = 0.5 * params.length_m
+    for ob in obstacles:
+        overlap = np.abs(s_k - ob.s_m) < half_len + 0.5 * ob.length_m + margin_m
+        clear = 0.5 * ob.width_m + half_w + margin_m
+        left = d_k >= ob.d_m
+        lo = np.where(overlap & left, np.maximum(lo, ob.d_m + clear), lo)
+        hi = np.where(overlap & ~left, np.minimum(hi, ob.d_m - clear), hi)
+    return lo, hi

@@ -1,0 +1,201 @@
+"""Traction-adaptive MPC planner (Svensson & Törngren, Sec. II; TAMP framework).
+
+Each :meth:`TractionAdaptivePlanner.step` shifts the previous plan, evaluates the per-stage friction
+estimate, normal loads and rear stiffness at the guess's predicted positions, builds the lateral
+corridor and runs one real-time iteration. A failed or non-finite solve keeps the shifted plan,
+is counted and logged, and never raises.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from mufusion.planner.ocp import (
+    CostWeights,
+    PlannerConfig,
+    PlannerObstacle,
+    lateral_corridor,
+    stage_parameters,
+)
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import (
+    N_INPUTS,
+    N_STATES,
+    State,
+    frenet_bicycle_dynamics,
+    rear_lateral_force_n,
+)
+
+_log = logging.getLogger(__name__)
+
+__all__ = ["CostWeights", "Plan", "PlannerConfig", "PlannerObstacle", "TractionAdaptivePlanner"]
+
+
+@dataclass(frozen=True)
+class Plan:
+    """One planning step's result (stage k at time ``t0_s + k·dt``)."""
+
+    t0_s: float
+    states: np.ndarray
+    inputs: np.ndarray
+    rear_lateral_force_n: np.ndarray
+    mu_hat: np.ndarray
+    normal_load_front_n: np.ndarray
+    normal_load_rear_n: np.ndarray
+    force_limit_front_n: np.ndarray
+    force_limit_rear_n: np.ndarray
+    status: int
+    ok: bool
+    fallback: bool
+    solve_time_s: float
+    sampled_reinit: bool = False
+    dt_s: float = 0.1
+
+
+def rollout(
+    x0: np.ndarray, inputs: np.ndarray, curvature: np.ndarray, rear_stiffness: np.ndarray,
+    params: VehicleParams, dt_s: float,
+) -> np.ndarray:
+    """RK4 roll-out of the planner model; ``inputs (N, 3, ...)`` → states ``(N+1, 6, ...)``."""
+    xs = [np.asarray(x0, dtype=float)]
+    for k in range(inputs.shape[0]):
+        x, u, c, cr = xs[-1], inputs[k], curvature[k], rear_stiffness[k]
+        k1 = frenet_bicycle_dynamics(x, u, c, cr, params)
+        k2 = frenet_bicycle_dynamics(x + 0.5 * dt_s * k1, u, c, cr, params)
+        k3 = frenet_bicycle_dynamics(x + 0.5 * dt_s * k2, u, c, cr, params)
+        k4 = frenet_bicycle_dynamics(x + dt_s * k3, u, c, cr, params)
+        xs.append(x + dt_s / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4))
+    return np.stack(xs)
+
+
+class TractionAdaptivePlanner:
+    """Real-time traction-adaptive planner; keeps the warm start between calls."""
+
+    def __init__(self, params: VehicleParams, config: PlannerConfig | None = None) -> None:
+        self.params = params
+        self.config = config or PlannerConfig()
+        self.failures = 0
+        self._prev: Plan | None = None
+        self._backend = None
+        if self.config.backend == "acados":
+            try:
+                from mufusion.planner.acados_backend import AcadosBackend
+
+                self._backend = AcadosBackend(params, self.config)
+            except Exception as exc:  # any build/load failure → reference backend
+                _log.warning("acados unavailable (%s); falling back to the CasADi backend", exc)
+        if self._backend is None:
+            from mufusion.planner.casadi_backend import CasadiBackend
+
+            self._backend = CasadiBackend(params, self.config)
+
+    # -- the guess ------------------------------------------------------------------------------
+    def _initial_guess(self, x0: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray]:
+        n, dt = self.config.horizon_steps, self.config.dt_s
+        prev = self._prev
+        if prev is not None and np.all(np.isfinite(prev.states)):
+            shift = int(np.clip(round((t_s - prev.t0_s) / dt), 0, n))
+            if shift <= n - 1 and abs(prev.states[shift, State.s] - x0[State.s]) < 10.0:
+                xs = np.concatenate([prev.states[shift:], np.repeat(prev.states[-1:], shift, 0)])
+                us = np.concatenate([prev.inputs[shift:], np.repeat(prev.inputs[-1:], shift, 0)])
+                xs = xs.copy()
+                xs[0] = x0
+                return xs, us
+        # Cold start: coast at the current speed along the current offset.
+        k = np.arange(n + 1)[:, None]
+        xs = np.tile(x0, (n + 1, 1)).astype(float)
+        xs[:, State.s] = x0[State.s] + k[:, 0] * dt * max(x0[State.vx], 0.0)
+        xs[1:, State.dpsi] = xs[1:, State.psidot] = xs[1:, State.vy] = 0.0
+        return xs, np.zeros((n, N_INPUTS))
+
+    # -- one planning step ----------------------------------------------------------------------
+    def step(
+        self,
+        x0: np.ndarray,
+        t_s: float,
+        curvature_of_s: Callable[[np.ndarray], np.ndarray],
+        mu_hat_of_s: Callable[[np.ndarray], np.ndarray],
+        obstacles: Sequence[PlannerObstacle] = (),
+        mode: Literal["cruise", "emergency"] = "cruise",
+        reference_speed_mps: float = 10.0,
+        reference_d_m: float = 0.0,
+        lane_d_min_m: float | None = None,
+        lane_d_max_m: float | None = None,
+    ) -> Plan:
+        """Plan from ``x0`` (Frenet state, shape (6,)) at time ``t_s`` [s].
+
+        Raises
+        ------
+        ValueError
+            If ``x0`` is not a finite 6-vector or ``mode`` is unknown.
+        """
+        x0 = np.asarray(x0, dtype=float)
+        if x0.shape != (N_STATES,) or not np.all(np.isfinite(x0)):
+            raise ValueError(f"x0 must be a finite array of shape (6,), got {x0!r}")
+        if mode not in ("cruise", "emergency"):
+            raise ValueError(f"mode must be 'cruise' or 'emergency', got {mode!r}")
+        cfg, par = self.config, self.params
+        lo_lane = cfg.lane_d_min_m if lane_d_min_m is None else lane_d_min_m
+        hi_lane = cfg.lane_d_max_m if lane_d_max_m is None else lane_d_max_m
+        obstacles = [
+            o if isinstance(o, PlannerObstacle) else PlannerObstacle(*map(float, o))
+            for o in obstacles
+        ]
+        started = time.perf_counter()
+        guess_x, guess_u = self._initial_guess(x0, t_s)
+        stage = stage_parameters(
+            guess_x, guess_u, curvature_of_s, mu_hat_of_s, par, cfg.utilization_factor
+        )
+        d_lo, d_hi = lateral_corridor(guess_x, obstacles, lo_lane, hi_lane, par,
+                                      cfg.obstacle_margin_m)
+        yref, weights = self._reference(stage["curvature"], mode, reference_speed_mps,
+                                        reference_d_m)
+        status, fallback = -1, False
+        try:
+            status, xs, us = self._backend.solve(
+                x0, guess_x, guess_u, stage["p"], yref, weights, d_lo, d_hi, cfg.min_speed_mps
+            )
+            good = status in (0, 2) and np.all(np.isfinite(xs)) and np.all(np.isfinite(us))
+        except Exception as exc:  # never raise inside the loop
+            _log.warning("planner backend raised %r", exc)
+            good = False
+        if not good:
+            self.failures += 1
+            fallback = True
+            _log.warning("planner solve failed (status %s, %d failures so far); keeping the "
+                         "shifted plan", status, self.failures)
+            xs, us = guess_x, guess_u
+        fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], par)
+        plan = Plan(
+            t0_s=float(t_s), states=xs, inputs=us, rear_lateral_force_n=np.asarray(fyr),
+            mu_hat=stage["mu_hat"], normal_load_front_n=stage["fzf"],
+            normal_load_rear_n=stage["fzr"], force_limit_front_n=stage["radius_front"],
+            force_limit_rear_n=stage["radius_rear"], status=int(status), ok=bool(good),
+            fallback=fallback, solve_time_s=time.perf_counter() - started,
+            sampled_reinit=False, dt_s=cfg.dt_s,
+        )
+        self._prev = plan
+        return plan
+
+    def _reference(self, curvature: np.ndarray, mode: str, v_ref: float, d_ref: float):
+        w: CostWeights = self.config.weights
+        n = self.config.horizon_steps
+        f_w = w.force_per_kn * 1e-6
+        speed_w, v = (w.emergency_speed, 0.0) if mode == "emergency" else (w.speed, v_ref)
+        weights = np.array([0.0, w.lateral_offset, w.heading_error, w.yaw_rate, speed_w,
+                            w.lateral_speed, f_w, f_w, f_w])
+        yref = np.zeros((n + 1, N_STATES + N_INPUTS))
+        yref[:, State.d] = d_ref
+        yref[:, State.vx] = v
+        kappa = np.append(curvature, curvature[-1])
+        # In a curve of curvature κ the steady yaw rate is κ v.
+        yref[:, State.psidot] = kappa * v
+        return yref, weights
+
+

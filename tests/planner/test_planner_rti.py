@@ -1,0 +1,65 @@
+"""Planner: friction polygons respected, lanes respected, failures fall back without raising."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mufusion.planner.ocp import PlannerConfig, polygon_directions
+from mufusion.planner.planner import Plan, TractionAdaptivePlanner
+from mufusion.vehicle.params import TRUCK
+from mufusion.vehicle.planner_model import Input
+
+CONFIG = PlannerConfig(lane_d_min_m=-1.75, lane_d_max_m=1.75)
+
+
+@pytest.fixture(scope="session")
+def planner() -> TractionAdaptivePlanner:
+    return TractionAdaptivePlanner(TRUCK, CONFIG)
+
+
+def _closed_loop(planner, kappa: float, mu: float, steps: int = 30) -> list[Plan]:
+    planner._prev = None
+    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
+    plans = []
+    for i in range(steps):
+        plan = planner.step(x, 0.1 * i, lambda s: kappa + 0 * s, lambda s: mu + 0 * s,
+                            [], "cruise", 15.0)
+        plans.append(plan)
+        x = plan.states[1]
+    return plans
+
+
+def _inside(force_x, force_y, radius, n_sides, tol=1e-3):
+    normals, ratio = polygon_directions(n_sides)
+    lhs = normals @ np.stack([force_x, force_y])
+    return np.all(lhs <= (ratio + tol) * radius)
+
+
+@pytest.mark.parametrize("kappa", [0.0, 1.0 / 60.0])
+def test_forces_inside_polygons_and_lane_kept(planner, kappa):
+    plans = _closed_loop(planner, kappa, mu=0.5)
+    for plan in plans:
+        assert plan.ok
+        u = plan.inputs
+        assert _inside(u[:, Input.fxf], u[:, Input.fyf], plan.force_limit_front_n, 12)
+        assert _inside(u[:, Input.fxr], plan.rear_lateral_force_n, plan.force_limit_rear_n, 12,
+                       tol=2e-2)
+        half_w = 0.5 * TRUCK.width_m
+        assert np.all(np.abs(plan.states[:, 1]) <= 1.75 - half_w + 0.05)
+
+
+def test_injected_failure_falls_back_and_loop_continues(planner, monkeypatch, caplog):
+    _closed_loop(planner, 0.0, 0.9, steps=3)
+    before = planner.failures
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("injected")
+
+    monkeypatch.setattr(planner._backend, "solve", broken)
+    x = planner._prev.states[1]
+    plan = planner.step(x, 0.3, lambda s: 0 * s, lambda s: 0.9 + 0 * s, [], "cruise", 15.0)
+    assert plan.fallback and not plan.ok
+    assert planner.failures == before + 1
+    assert np.all(np.isfinite(plan.states))
+    assert "failed" in caplog.text
