@@ -10,7 +10,13 @@ import logging
 import numpy as np
 
 from mufusion.planner.acados_loader import cache_dir, load_acados_template
-from mufusion.planner.ocp import N_PARAMS, Param, PlannerConfig, polygon_directions
+from mufusion.planner.ocp import (
+    N_PARAMS,
+    Param,
+    PlannerConfig,
+    longitudinal_force_bounds_n,
+    polygon_directions,
+)
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -22,7 +28,7 @@ from mufusion.vehicle.planner_model import (
 )
 
 _log = logging.getLogger(__name__)
-_FORMAT_VERSION = "1"
+_FORMAT_VERSION = "2"
 
 
 def problem_hash(params: VehicleParams, config: PlannerConfig) -> str:
@@ -104,6 +110,8 @@ class AcadosBackend:
         ocp.constraints.lbx_e = np.array([-1.0])
         ocp.constraints.ubx_e = np.array([1.0])
         ocp.constraints.idxsbx_e = np.array([0])
+        ocp.constraints.idxbu = np.array([Input.fxf, Input.fxr])
+        ocp.constraints.lbu, ocp.constraints.ubu = longitudinal_force_bounds_n(params)
         ocp.constraints.lh = np.full(2 * ns, -1e3)
         ocp.constraints.uh = np.zeros(2 * ns)
         # Front forces are inputs and always have a feasible choice (hard); the rear lateral force

@@ -1,8 +1,8 @@
 """Backend-independent description of the traction-adaptive OCP (Svensson & Törngren, Sec. II).
 
 Small factories assemble the pieces: per-stage parameters (curvature, rear stiffness, polygon
-radii),
-friction polygons, the lateral corridor from lanes and obstacles, and the cost weights.
+radii), friction polygons, actuator bounds on the longitudinal forces, the lateral corridor from
+lanes and obstacles, and the cost weights.
 """
 
 from __future__ import annotations
@@ -91,6 +91,16 @@ class PlannerConfig:
             raise ValueError(f"backend must be 'acados' or 'casadi', got {self.backend!r}")
         if self.lane_d_min_m >= self.lane_d_max_m:
             raise ValueError("lane_d_min_m must be below lane_d_max_m")
+
+
+def longitudinal_force_bounds_n(params: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on ``(F_xf, F_xr)`` [N] from the actuators: the front axle only brakes (the
+    :class:`~mufusion.vehicle.actuators.ActuatorCommand` clips front drive torque), the rear
+    drives and brakes. Inputs, so they are hard."""
+    r = params.wheel_radius_m
+    lower = np.array([-params.max_brake_torque_front_nm / r, -params.max_brake_torque_rear_nm / r])
+    upper = np.array([0.0, params.max_drive_torque_nm / r])
+    return lower, upper
 
 
 def polygon_directions(n_sides: int) -> tuple[np.ndarray, float]:

@@ -1,0 +1,115 @@
+"""Tracking controller: turns the current plan into actuator commands at ≥ 50 Hz.
+
+Steering = inverse Magic-Formula of the planned front lateral force at the planned normal load and
+friction estimate, plus the small-angle slip kinematics ``δ = α_f + (v_y + l_f ψ̇)/v_x``, plus
+feedback on lateral and heading error. Wheel torques = planned longitudinal forces × wheel radius,
+plus speed feedback. The command is rate-limited and clipped to the actuators' ranges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mufusion.planner.planner import Plan
+from mufusion.vehicle.actuators import ActuatorCommand
+from mufusion.vehicle.params import TireParams, VehicleParams
+from mufusion.vehicle.planner_model import MIN_SPEED_FOR_SLIP_MPS, Input, State
+
+
+@dataclass(frozen=True)
+class ControllerGains:
+    """Feedback gains (named, SI units)."""
+
+    lateral_rad_per_m: float = 0.05
+    heading_rad_per_rad: float = 0.6
+    speed_1_per_s: float = 0.8
+    rate_hz: float = 50.0
+
+
+def _magic_formula_lateral(alpha: np.ndarray, fz: float, mu: float, tire: TireParams):
+    c, e = tire.shape_lateral, tire.curvature_lateral
+    d = mu * fz
+    b = tire.cornering_stiffness_per_load_1_per_rad * fz / (c * d)
+    ba = b * alpha
+    return d * np.sin(c * np.arctan(ba - e * (ba - np.arctan(ba))))
+
+
+def front_slip_angle_for_force_rad(
+    force_n: float, normal_load_n: float, mu_hat: float, tire: TireParams
+) -> float:
+    """Slip angle [rad] at which the lateral Magic Formula gives ``force_n`` (saturated at peak).
+
+    Stiffness ``cornering_stiffness_per_load × F_z``, peak ``μ̂ F_z`` (TireParams' convention).
+    """
+    fz, mu = max(normal_load_n, 1.0), max(mu_hat, 0.05)
+    c = tire.shape_lateral
+    b = tire.cornering_stiffness_per_load_1_per_rad / (c * mu)
+    # The force rises monotonically up to the peak at C·atan(...) = π/2; tabulate up to there.
+    alpha = np.linspace(0.0, 3.0 / b, 400)
+    force = _magic_formula_lateral(alpha, fz, mu, tire)
+    peak = int(np.argmax(force))
+    magnitude = float(np.interp(abs(force_n), force[: peak + 1], alpha[: peak + 1]))
+    return float(np.sign(force_n)) * magnitude
+
+
+class TrackingController:
+    """Feed-forward + feedback plan tracker; keeps only the configuration."""
+
+    def __init__(self, params: VehicleParams, config=None, gains: ControllerGains | None = None):
+        self.params = params
+        self.config = config
+        self.gains = gains or ControllerGains()
+        if self.gains.rate_hz < 50.0:
+            raise ValueError(f"rate_hz must be >= 50 Hz, got {self.gains.rate_hz}")
+
+    def command(
+        self,
+        t_s: float,
+        x_frenet: np.ndarray,
+        steer_rad_now: float,
+        plan: Plan,
+        curvature_1pm_now: float = 0.0,
+    ) -> ActuatorCommand:
+        """Actuator command at time ``t_s`` [s] for the Frenet state ``x_frenet`` (6,)."""
+        par, g = self.params, self.gains
+        x = np.asarray(x_frenet, dtype=float)
+        n = plan.inputs.shape[0]
+        tau = float(np.clip((t_s - plan.t0_s) / plan.dt_s, 0.0, n - 1e-9))
+        k = int(tau)
+        frac = tau - k
+        x_ref = (1.0 - frac) * plan.states[k] + frac * plan.states[k + 1]
+        u = plan.inputs[k]
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(x_ref)) and np.all(np.isfinite(u))):
+            # Degrade, never raise: hold the wheel and brake gently.
+            brake = -0.1 * par.mass_kg * 9.81 * par.wheel_radius_m
+            return ActuatorCommand(float(steer_rad_now), 0.5 * brake, 0.5 * brake).clipped(par)
+
+        vx = max(x[State.vx], MIN_SPEED_FOR_SLIP_MPS)
+        alpha_f = front_slip_angle_for_force_rad(
+            float(u[Input.fyf]), float(plan.normal_load_front_n[k]), float(plan.mu_hat[k]),
+            par.tire,
+        )
+        vx_ref = max(x_ref[State.vx], MIN_SPEED_FOR_SLIP_MPS)
+        # α_f = δ − (v_y + l_f ψ̇)/v_x, solved for δ.
+        kinematic = x_ref[State.vy] + par.cog_to_front_axle_m * x_ref[State.psidot]
+        delta_ff = alpha_f + kinematic / vx_ref
+        # Left positive: a lateral offset to the right of the plan steers left.
+        delta_fb = g.lateral_rad_per_m * (x_ref[State.d] - x[State.d]) + g.heading_rad_per_rad * (
+            x_ref[State.dpsi] - x[State.dpsi]
+        )
+        delta = delta_ff + delta_fb
+        max_step = par.max_steer_rate_radps / g.rate_hz
+        delta = float(np.clip(delta, steer_rad_now - max_step, steer_rad_now + max_step))
+
+        extra_force = par.mass_kg * g.speed_1_per_s * (x_ref[State.vx] - vx)
+        fxf, fxr = float(u[Input.fxf]), float(u[Input.fxr])
+        if extra_force >= 0.0:
+            fxr += extra_force
+        else:
+            share_front = par.cog_to_rear_axle_m / par.wheelbase_m
+            fxf += share_front * extra_force
+            fxr += (1.0 - share_front) * extra_force
+        r = par.wheel_radius_m
+        return ActuatorCommand(delta, fxf * r, fxr * r).clipped(par)

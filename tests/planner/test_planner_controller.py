@@ -1,0 +1,78 @@
+"""Tracking controller: inverse tire model, limits, rate limit, signs."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mufusion.planner.controller import (
+    ControllerGains,
+    TrackingController,
+    _magic_formula_lateral,
+    front_slip_angle_for_force_rad,
+)
+from mufusion.planner.planner import Plan
+from mufusion.vehicle.params import TRUCK
+from mufusion.vehicle.planner_model import Input, State
+
+
+def _plan(fyf: float, fxf: float, fxr: float, v: float = 15.0, d: float = 0.0) -> Plan:
+    n = 40
+    states = np.zeros((n + 1, 6))
+    states[:, State.vx] = v
+    states[:, State.d] = d
+    states[:, State.s] = v * 0.1 * np.arange(n + 1)
+    inputs = np.tile([fyf, fxf, fxr], (n, 1)).astype(float)
+    ones = np.ones(n)
+    return Plan(0.0, states, inputs, 0 * ones, 0.8 * ones, 5e4 * ones, 3e4 * ones,
+                3.6e4 * ones, 2.2e4 * ones, 0, True, False, 0.0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(0.0, 0.95), st.floats(0.2, 1.2), st.floats(1e4, 6e4))
+def test_inverse_tire_model_recovers_force(fraction, mu, fz):
+    force = fraction * mu * fz
+    alpha = front_slip_angle_for_force_rad(force, fz, mu, TRUCK.tire)
+    assert np.isclose(_magic_formula_lateral(alpha, fz, mu, TRUCK.tire), force, rtol=1e-2,
+                      atol=20.0)
+    assert np.isclose(front_slip_angle_for_force_rad(-force, fz, mu, TRUCK.tire), -alpha)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(-6e4, 6e4), st.floats(-1e5, 0.0), st.floats(-1e5, 1e5), st.floats(-0.5, 0.5),
+       st.floats(-2.0, 2.0), st.floats(0.0, 3.9))
+def test_commands_never_exceed_limits_or_steer_rate(fyf, fxf, fxr, steer_now, d_err, t):
+    ctrl = TrackingController(TRUCK)
+    steer_now = float(np.clip(steer_now, -TRUCK.max_steer_rad, TRUCK.max_steer_rad))
+    x = np.array([15.0 * t, d_err, 0.0, 0.0, 15.0, 0.0])
+    cmd = ctrl.command(t, x, steer_now, _plan(fyf, fxf, fxr), 0.0)
+    assert abs(cmd.steer_rad) <= TRUCK.max_steer_rad + 1e-12
+    assert abs(cmd.steer_rad - steer_now) <= TRUCK.max_steer_rate_radps / 50.0 + 1e-12
+    assert cmd.torque_front_nm <= 0.0
+    assert -TRUCK.max_brake_torque_rear_nm <= cmd.torque_rear_nm <= TRUCK.max_drive_torque_nm
+
+
+def test_left_force_steers_left_and_offset_right_steers_back():
+    ctrl = TrackingController(TRUCK, gains=ControllerGains())
+    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
+    # Many small rate-limited steps converge on the feed-forward angle.
+    steer = 0.0
+    for _ in range(50):
+        steer = ctrl.command(0.0, x, steer, _plan(2e4, 0.0, 0.0), 0.0).steer_rad
+    assert steer > 0.0
+    x_right = x.copy()
+    x_right[State.d] = -1.0
+    assert ctrl.command(0.0, x_right, 0.0, _plan(0.0, 0.0, 0.0), 0.0).steer_rad > 0.0
+
+
+def test_braking_plan_gives_braking_torques_and_slow_plan_brakes():
+    ctrl = TrackingController(TRUCK)
+    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
+    cmd = ctrl.command(0.0, x, 0.0, _plan(0.0, -2e4, -2e4), 0.0)
+    assert cmd.torque_front_nm < 0.0 and cmd.torque_rear_nm < 0.0
+    fast = x.copy()
+    fast[State.vx] = 20.0
+    cmd = ctrl.command(0.0, fast, 0.0, _plan(0.0, 0.0, 0.0, v=15.0), 0.0)
+    assert cmd.torque_rear_nm < 0.0
+    assert Input.fyf == 0
