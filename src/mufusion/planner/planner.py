@@ -23,6 +23,14 @@ from mufusion.planner.ocp import (
     lateral_corridor,
     stage_parameters,
 )
+from mufusion.planner.sampling import (
+    SHIFTED_DISCOUNT,
+    VIOLATION_WEIGHT,
+    SamplingConfig,
+    candidate_rollouts,
+    tracking_cost,
+    violation_m,
+)
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -77,10 +85,16 @@ def rollout(
 class TractionAdaptivePlanner:
     """Real-time traction-adaptive planner; keeps the warm start between calls."""
 
-    def __init__(self, params: VehicleParams, config: PlannerConfig | None = None) -> None:
+    def __init__(
+        self,
+        params: VehicleParams,
+        config: PlannerConfig | None = None,
+        sampling: SamplingConfig | None = None,
+    ) -> None:
         self.params = params
         self.config = config or PlannerConfig()
         self.failures = 0
+        self.sampling = sampling or SamplingConfig()
         self._prev: Plan | None = None
         self._backend = None
         if self.config.backend == "acados":
@@ -149,6 +163,13 @@ class TractionAdaptivePlanner:
         ]
         started = time.perf_counter()
         guess_x, guess_u = self._initial_guess(x0, t_s)
+        sampled = False
+        if cfg.use_sampling:
+            v_ref = 0.0 if mode == "emergency" else reference_speed_mps
+            guess_x, guess_u, sampled = self._sample(
+                x0, guess_x, guess_u, curvature_of_s, mu_hat_of_s, obstacles, v_ref,
+                reference_d_m, lo_lane, hi_lane,
+            )
         stage = stage_parameters(
             guess_x, guess_u, curvature_of_s, mu_hat_of_s, par, cfg.utilization_factor
         )
@@ -178,10 +199,46 @@ class TractionAdaptivePlanner:
             normal_load_rear_n=stage["fzr"], force_limit_front_n=stage["radius_front"],
             force_limit_rear_n=stage["radius_rear"], status=int(status), ok=bool(good),
             fallback=fallback, solve_time_s=time.perf_counter() - started,
-            sampled_reinit=False, dt_s=cfg.dt_s,
+            sampled_reinit=sampled, dt_s=cfg.dt_s,
         )
         self._prev = plan
         return plan
+
+    def _sample(self, x0, guess_x, guess_u, curvature_of_s, mu_hat_of_s, obstacles, v_ref, d_ref,
+                lo_lane, hi_lane):
+        """SAA: replace the shifted guess by the best sampled roll-out when that beats it."""
+        cfg, par, sc = self.config, self.params, self.sampling
+        try:
+            shifted_violation = float(violation_m(
+                guess_x[:, :, None], obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m
+            )[0])
+            if self._prev is not None and shifted_violation <= sc.trigger_violation_m:
+                return guess_x, guess_u, False
+            half_w = 0.5 * par.width_m
+            lateral = np.append(
+                np.linspace(lo_lane + half_w, hi_lane - half_w, sc.n_lateral), d_ref
+            )
+            speeds = np.append(np.asarray(sc.speed_fractions) * v_ref, x0[State.vx])
+            with np.errstate(all="ignore"):  # diverging candidates are discarded below
+                xs, us = candidate_rollouts(
+                    x0, lateral, speeds, curvature_of_s, mu_hat_of_s, par,
+                    cfg.utilization_factor, cfg.horizon_steps, cfg.dt_s, sc,
+                )
+            both = np.concatenate([guess_x[:, :, None], xs], axis=2)
+            with np.errstate(all="ignore"):
+                tracking = tracking_cost(both, v_ref, d_ref)
+            tracking[0] *= SHIFTED_DISCOUNT
+            cost = tracking + VIOLATION_WEIGHT * violation_m(
+                both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m
+            )
+            cost = np.where(np.isfinite(cost), cost, np.inf)
+            best = int(np.argmin(cost))
+            if best == 0 or not np.isfinite(cost[best]):
+                return guess_x, guess_u, False
+            return xs[:, :, best - 1], us[:, :, best - 1], True
+        except Exception as exc:  # sampling is an aid; never let it break the loop
+            _log.warning("sampling augmentation failed: %r", exc)
+            return guess_x, guess_u, False
 
     def _reference(self, curvature: np.ndarray, mode: str, v_ref: float, d_ref: float):
         w: CostWeights = self.config.weights

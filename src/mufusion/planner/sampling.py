@@ -1,0 +1,138 @@
+"""Sampling augmentation of the RTI initial guess (SAA-RTI, Svensson et al., arXiv 1903.04240).
+
+Candidate manoeuvres (lateral targets × speed targets) are rolled out with the planner's own model
+under a simple tracking law saturated at the friction limits, all at once in numpy. Each roll-out
+and the shifted previous plan are scored on tracking plus a heavy penalty on obstacle and road
+violations; the best becomes the initial guess when it beats the shifted plan. Because the
+obstacle corridor's side is chosen by the guess, this is what lets the planner switch sides.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mufusion.planner.ocp import PlannerObstacle, longitudinal_force_bounds_n
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import (
+    N_INPUTS,
+    Input,
+    State,
+    frenet_bicycle_dynamics,
+    normal_loads_n,
+    rear_cornering_stiffness_n_per_rad,
+)
+
+# Cost of one metre of obstacle/road violation relative to tracking (per stage) [1/m].
+VIOLATION_WEIGHT = 1e4
+# The shifted previous plan's tracking cost is discounted for consistency between cycles (TAMP:
+# ×0.3); its violation is not, so a plan made obsolete by a pop-up obstacle loses.
+SHIFTED_DISCOUNT = 0.3
+
+
+@dataclass(frozen=True)
+class SamplingConfig:
+    """Candidate grid and tracking-law gains."""
+
+    n_lateral: int = 9
+    speed_fractions: tuple[float, ...] = (0.0, 0.5, 1.0)
+    # Sample only when the shifted plan violates the current constraints by more than this [m].
+    trigger_violation_m: float = 0.05
+    heading_gain_1_per_s: float = 2.5
+    yaw_rate_gain_1_per_s: float = 6.0
+    speed_gain_1_per_s: float = 1.0
+    min_lookahead_m: float = 5.0
+    lookahead_time_s: float = 0.5
+
+
+def violation_m(
+    states: np.ndarray,
+    obstacles: Sequence[PlannerObstacle],
+    lane_d_min_m: float,
+    lane_d_max_m: float,
+    params: VehicleParams,
+    margin_m: float,
+) -> np.ndarray:
+    """Summed footprint violation [m] of trajectories ``states (N+1, 6, M)`` → ``(M,)``."""
+    s, d = states[1:, State.s], states[1:, State.d]
+    half_w = 0.5 * params.width_m
+    total = np.maximum(lane_d_min_m + half_w - d, 0.0) + np.maximum(d - lane_d_max_m + half_w, 0.0)
+    for ob in obstacles:
+        overlap = np.abs(s - ob.s_m) < 0.5 * params.length_m + 0.5 * ob.length_m + margin_m
+        clear = 0.5 * ob.width_m + half_w + margin_m
+        total = total + np.where(overlap, np.maximum(clear - np.abs(d - ob.d_m), 0.0), 0.0)
+    return total.sum(axis=0)
+
+
+def tracking_cost(states: np.ndarray, v_ref: float, d_ref: float) -> np.ndarray:
+    """Speed and lateral tracking cost of trajectories ``(N+1, 6, M)`` → ``(M,)``."""
+    x = states[1:]
+    return ((x[:, State.vx] - v_ref) ** 2 + 0.5 * (x[:, State.d] - d_ref) ** 2).sum(axis=0)
+
+
+def candidate_rollouts(
+    x0: np.ndarray,
+    lateral_targets_m: np.ndarray,
+    speed_targets_mps: np.ndarray,
+    curvature_of_s,
+    mu_hat_of_s,
+    params: VehicleParams,
+    utilization_factor: float,
+    horizon_steps: int,
+    dt_s: float,
+    config: SamplingConfig,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Roll out every (lateral target, speed target) pair.
+
+    Returns
+    -------
+    states, inputs
+        ``(N+1, 6, M)`` and ``(N, 3, M)`` with ``M = len(lateral) × len(speed)``.
+    """
+    d_t, v_t = (a.ravel() for a in np.meshgrid(lateral_targets_m, speed_targets_mps))
+    m_count = d_t.size
+    x = np.repeat(np.asarray(x0, dtype=float)[:, None], m_count, axis=1)
+    lower, upper = longitudinal_force_bounds_n(params)
+    m, lf, lr, iz = (params.mass_kg, params.cog_to_front_axle_m, params.cog_to_rear_axle_m,
+                     params.yaw_inertia_kgm2)
+    share_front = lr / params.wheelbase_m
+    xs, us = [x], []
+    ax = np.zeros(m_count)
+    for _ in range(horizon_steps):
+        v = np.maximum(x[State.vx], 1.0)
+        kappa = np.asarray(curvature_of_s(x[State.s]), dtype=float) * np.ones(m_count)
+        mu = np.asarray(mu_hat_of_s(x[State.s]), dtype=float) * np.ones(m_count)
+        fzf, fzr = normal_loads_n(ax, params)
+        c_r = rear_cornering_stiffness_n_per_rad(params, fzr)
+        lookahead = np.maximum(config.min_lookahead_m, config.lookahead_time_s * v)
+        dpsi_des = np.arctan2(d_t - x[State.d], lookahead)
+        r_des = kappa * v + config.heading_gain_1_per_s * (dpsi_des - x[State.dpsi])
+        fyf = share_front * m * v * r_des + iz / lf * config.yaw_rate_gain_1_per_s * (
+            r_des - x[State.psidot]
+        )
+        f_long = m * config.speed_gain_1_per_s * (v_t - x[State.vx])
+        fxf = np.where(f_long < 0.0, share_front * f_long, 0.0)
+        fxr = np.where(f_long < 0.0, (1.0 - share_front) * f_long, f_long)
+        # Saturate at the friction limits (longitudinal first, lateral gets what remains).
+        limit_f = utilization_factor * mu * fzf
+        limit_r = utilization_factor * mu * fzr
+        fxf = np.clip(fxf, np.maximum(lower[0], -0.8 * limit_f), upper[0])
+        fxr = np.clip(
+            fxr, np.maximum(lower[1], -0.8 * limit_r), np.minimum(upper[1], 0.8 * limit_r)
+        )
+        lat_room = np.sqrt(np.maximum(limit_f**2 - fxf**2, 0.0)) * 0.95
+        fyf = np.clip(fyf, -lat_room, lat_room)
+        u = np.stack([fyf, fxf, fxr])
+        u[Input.fyf], u[Input.fxf], u[Input.fxr] = fyf, fxf, fxr
+        k1 = frenet_bicycle_dynamics(x, u, kappa, c_r, params)
+        k2 = frenet_bicycle_dynamics(x + 0.5 * dt_s * k1, u, kappa, c_r, params)
+        k3 = frenet_bicycle_dynamics(x + 0.5 * dt_s * k2, u, kappa, c_r, params)
+        k4 = frenet_bicycle_dynamics(x + dt_s * k3, u, kappa, c_r, params)
+        x = x + dt_s / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        x[State.vx] = np.maximum(x[State.vx], 0.0)
+        ax = (fxf + fxr) / m
+        xs.append(x)
+        us.append(u)
+    return np.stack(xs), np.stack(us).reshape(horizon_steps, N_INPUTS, m_count)
