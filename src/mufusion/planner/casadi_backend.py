@@ -1,16 +1,125 @@
-"""Reference backend: the same OCP solved to convergence by CasADi + IPOPT (not yet implemented)."""
+"""Reference backend: the same OCP description solved to convergence by CasADi + IPOPT.
+
+Used in tests as the reference for the real-time iteration and as the fallback where acados has no
+wheel. The objective matches acados' conventions: stage cost and slack penalties are multiplied by
+``dt``, the terminal cost is not; least-squares terms carry the factor 1/2.
+"""
 
 from __future__ import annotations
 
-from mufusion.planner.ocp import PlannerConfig
+import numpy as np
+
+from mufusion.planner.acados_backend import constraint_expressions
+from mufusion.planner.ocp import N_PARAMS, Param, PlannerConfig, longitudinal_force_bounds_n
 from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import N_INPUTS, N_STATES, Input, State, frenet_bicycle_dynamics
+
+_MAX_SPEED_MPS = 100.0
 
 
 class CasadiBackend:
-    """Placeholder: raises on solve, so the planner reports a failed step and keeps its plan."""
+    """Multiple shooting with one RK4 step per stage (as acados' ERK), solved by IPOPT."""
 
     def __init__(self, params: VehicleParams, config: PlannerConfig) -> None:
-        self.params, self.config = params, config
+        import casadi as ca
 
-    def solve(self, *args, **kwargs):
-        raise NotImplementedError("the CasADi reference backend is not implemented yet")
+        self.params, self.config = params, config
+        n, ns, dt = config.horizon_steps, config.polygon_sides, config.dt_s
+        w = config.weights
+        x = ca.SX.sym("x", N_STATES)
+        u = ca.SX.sym("u", N_INPUTS)
+        p = ca.SX.sym("p", N_PARAMS)
+
+        def f(xx):
+            return frenet_bicycle_dynamics(xx, u, p[Param.curvature], p[Param.rear_stiffness],
+                                           params)
+
+        k1 = f(x)
+        k2 = f(x + 0.5 * dt * k1)
+        k3 = f(x + 0.5 * dt * k2)
+        k4 = f(x + dt * k3)
+        step = ca.Function("step", [x, u, p], [x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)])
+        h = ca.Function("h", [x, u, p], [constraint_expressions(x, u, p, params, ns)])
+
+        ny = N_STATES + N_INPUTS
+        X = ca.SX.sym("X", N_STATES, n + 1)
+        U = ca.SX.sym("U", N_INPUTS, n)
+        S_lo = ca.SX.sym("S_lo", n)  # d-bound slacks, stages 1..N
+        S_hi = ca.SX.sym("S_hi", n)
+        S_r = ca.SX.sym("S_r", ns, n)  # rear-polygon slacks, stages 0..N-1
+        P = ca.SX.sym("P", N_PARAMS, n)
+        YREF = ca.SX.sym("YREF", ny, n + 1)
+        WD = ca.SX.sym("WD", ny)
+        X0 = ca.SX.sym("X0", N_STATES)
+        DLO = ca.SX.sym("DLO", n)
+        DHI = ca.SX.sym("DHI", n)
+
+        def slack_cost(s):
+            return ca.sum1(w.slack_l1 * s + 0.5 * w.slack_l2 * s**2)
+
+        cost = 0
+        g, lbg, ubg = [X[:, 0] - X0], [0.0] * N_STATES, [0.0] * N_STATES
+        for k in range(n):
+            r = ca.vertcat(X[:, k], U[:, k]) - YREF[:, k]
+            cost += dt * 0.5 * ca.sum1(WD * r**2)
+            cost += dt * slack_cost(S_r[:, k])
+            g.append(X[:, k + 1] - step(X[:, k], U[:, k], P[:, k]))
+            lbg += [0.0] * N_STATES
+            ubg += [0.0] * N_STATES
+            hk = h(X[:, k], U[:, k], P[:, k])
+            g.append(hk[:ns])
+            lbg += [-1e3] * ns
+            ubg += [0.0] * ns
+            g.append(hk[ns:] - S_r[:, k])
+            lbg += [-1e3] * ns
+            ubg += [0.0] * ns
+            # d bounds at stage k+1 (softened); terminal slacks carry no dt factor.
+            scale = dt if k < n - 1 else 1.0
+            cost += scale * (slack_cost(S_lo[k]) + slack_cost(S_hi[k]))
+            g.append(X[State.d, k + 1] + S_lo[k] - DLO[k])
+            lbg.append(0.0)
+            ubg.append(np.inf)
+            g.append(X[State.d, k + 1] - S_hi[k] - DHI[k])
+            lbg.append(-np.inf)
+            ubg.append(0.0)
+        r_e = X[:, n] - YREF[:N_STATES, n]
+        cost += 0.5 * ca.sum1(WD[:N_STATES] * r_e**2)
+
+        self._n_x = N_STATES * (n + 1)
+        self._n_u = N_INPUTS * n
+        z = ca.vertcat(ca.vec(X), ca.vec(U), S_lo, S_hi, ca.vec(S_r))
+        par = ca.vertcat(ca.vec(P), ca.vec(YREF), WD, X0, DLO, DHI)
+        self._lbg, self._ubg = np.array(lbg), np.array(ubg)
+        self._n_z = z.shape[0]
+        self._solver = ca.nlpsol(
+            "tamp_ref", "ipopt", {"x": z, "p": par, "f": cost, "g": ca.vertcat(*g)},
+            {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": 1e-9,
+             "ipopt.max_iter": 300, "ipopt.sb": "yes"},
+        )
+        lower, upper = longitudinal_force_bounds_n(params)
+        lbu = np.tile([-np.inf, lower[0], lower[1]], (n, 1))
+        ubu = np.tile([np.inf, upper[0], upper[1]], (n, 1))
+        self._lbu, self._ubu = lbu, ubu
+        self._n_slack = 2 * n + ns * n
+
+    def solve(self, x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi, min_speed_mps):
+        """Solve to convergence; returns ``(status, states (N+1, 6), inputs (N, 3))``."""
+        n = self.config.horizon_steps
+        lbx_x = np.full((n + 1, N_STATES), -np.inf)
+        ubx_x = np.full((n + 1, N_STATES), np.inf)
+        # vx bounds at stages 1..N-1 are hard, as in the acados description.
+        lbx_x[1:n, State.vx] = min_speed_mps
+        ubx_x[1:n, State.vx] = _MAX_SPEED_MPS
+        lbz = np.concatenate([lbx_x.ravel(), self._lbu.ravel(), np.zeros(self._n_slack)])
+        ubz = np.concatenate([ubx_x.ravel(), self._ubu.ravel(), np.full(self._n_slack, np.inf)])
+        z0 = np.concatenate([guess_x.ravel(), guess_u.ravel(), np.zeros(self._n_slack)])
+        par = np.concatenate([p.ravel(), yref.ravel(), weights, x0, d_lo, d_hi])
+        sol = self._solver(x0=z0, p=par, lbx=lbz, ubx=ubz, lbg=self._lbg, ubg=self._ubg)
+        ok = bool(self._solver.stats()["success"])
+        z = np.asarray(sol["x"]).ravel()
+        xs = z[: self._n_x].reshape(n + 1, N_STATES)
+        us = z[self._n_x : self._n_x + self._n_u].reshape(n, N_INPUTS)
+        return (0 if ok else 1), xs, us
+
+
+__all__ = ["CasadiBackend", "Input"]
