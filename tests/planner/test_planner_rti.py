@@ -63,3 +63,43 @@ def test_injected_failure_falls_back_and_loop_continues(planner, monkeypatch, ca
     assert planner.failures == before + 1
     assert np.all(np.isfinite(plan.states))
     assert "failed" in caplog.text
+
+
+def test_acados_unavailable_falls_back_to_casadi_with_warning(monkeypatch, caplog):
+    import mufusion.planner.acados_backend as acados_backend
+    from mufusion.planner.acados_loader import AcadosUnavailable
+    from mufusion.planner.casadi_backend import CasadiBackend
+
+    def missing():
+        raise AcadosUnavailable("no wheel")
+
+    monkeypatch.setattr(acados_backend, "load_acados_template", missing)
+    planner = TractionAdaptivePlanner(TRUCK, PlannerConfig(horizon_steps=10))
+    assert isinstance(planner._backend, CasadiBackend)
+    assert "falling back" in caplog.text
+    plan = planner.step(np.array([0.0, 0.0, 0.0, 0.0, 10.0, 0.0]), 0.0, lambda s: 0 * s,
+                        lambda s: 0.8 + 0 * s, [], "cruise", 10.0)
+    assert plan.ok and plan.states.shape == (11, 6)
+
+
+def test_emergency_mode_stops_about_as_short_as_friction_allows(planner):
+    planner._prev = None
+    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
+    mu = 0.8
+    for i in range(40):
+        plan = planner.step(x, 0.1 * i, lambda s: 0 * s, lambda s: mu + 0 * s, [], "emergency",
+                            15.0)
+        x = plan.states[1]
+        if x[4] < 0.1:
+            break
+    # Braking distance v²/(2 λ μ g) at the polygon's inscribed radius; RTI within 25 %.
+    ideal = 15.0**2 / (2 * 0.9 * np.cos(np.pi / 12) * mu * 9.81)
+    assert x[0] < 1.25 * ideal
+    assert x[0] > 0.9 * 15.0**2 / (2 * mu * 9.81)
+
+
+def test_config_rejects_bad_values():
+    with pytest.raises(ValueError, match="polygon_sides"):
+        PlannerConfig(polygon_sides=8)
+    with pytest.raises(ValueError, match="utilization_factor"):
+        PlannerConfig(utilization_factor=1.5)

@@ -180,7 +180,8 @@ class TractionAdaptivePlanner:
         status, fallback = -1, False
         try:
             status, xs, us = self._backend.solve(
-                x0, guess_x, guess_u, stage["p"], yref, weights, d_lo, d_hi, cfg.min_speed_mps
+                x0, guess_x, guess_u, stage["p"], yref, weights, d_lo, d_hi,
+                0.0 if mode == "emergency" else cfg.min_speed_mps,
             )
             good = status in (0, 2) and np.all(np.isfinite(xs)) and np.all(np.isfinite(us))
         except Exception as exc:  # never raise inside the loop

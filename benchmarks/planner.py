@@ -1,0 +1,178 @@
+"""Planner step time: acados RTI planner against do-mpc (IPOPT) on the same OCP, in one run.
+
+Run: ``python benchmarks/planner.py``. A fusion-free closed loop (≥ 200 planning steps, N = 40) on
+a road with a curve and a friction drop; the plant is the planner's model under the first planned
+input (fine RK4). Per step we time constraint update + solve + read-out. Prints a JSON line with
+``median_step_ms``, ``p99_step_ms``, ``max_step_ms``, ``speedup_vs_dompc``; numbers go to
+docs/performance.md, section "## Planner".
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+import warnings
+
+import numpy as np
+
+from mufusion.planner.acados_backend import constraint_expressions
+from mufusion.planner.ocp import (
+    Param,
+    PlannerConfig,
+    lateral_corridor,
+    longitudinal_force_bounds_n,
+    stage_parameters,
+)
+from mufusion.planner.planner import TractionAdaptivePlanner, rollout
+from mufusion.vehicle.params import TRUCK
+from mufusion.vehicle.planner_model import (
+    State,
+    frenet_bicycle_dynamics,
+    normal_loads_n,
+    rear_cornering_stiffness_n_per_rad,
+)
+
+STEPS = 220
+DOMPC_STEPS = 60
+V_REF = 15.0
+LANE = (-1.75, 1.75)
+
+
+def curvature(s):
+    s = np.asarray(s, dtype=float)
+    return np.where((s > 60.0) & (s < 160.0), 1.0 / 80.0, 0.0)
+
+
+def mu_hat(s):
+    return np.where(np.asarray(s, dtype=float) > 100.0, 0.5, 0.8)
+
+
+def plant_step(x, u, dt=0.1, substeps=10):
+    fzr = normal_loads_n((u[1] + u[2]) / TRUCK.mass_kg, TRUCK)[1]
+    c_r = rear_cornering_stiffness_n_per_rad(TRUCK, fzr)
+    for _ in range(substeps):
+        x = rollout(x, u[None], np.array([curvature(x[State.s])]), np.array([c_r]), TRUCK,
+                    dt / substeps)[1]
+    return x
+
+
+def run_ours(config: PlannerConfig) -> np.ndarray:
+    planner = TractionAdaptivePlanner(TRUCK, config)
+    x = np.array([0.0, 0.0, 0.0, 0.0, V_REF, 0.0])
+    times = []
+    for i in range(STEPS):
+        start = time.perf_counter()
+        plan = planner.step(x, 0.1 * i, curvature, mu_hat, [], "cruise", V_REF,
+                            lane_d_min_m=LANE[0], lane_d_max_m=LANE[1])
+        times.append(time.perf_counter() - start)
+        x = plant_step(x, plan.inputs[0])
+    return 1e3 * np.array(times)
+
+
+def run_dompc(config: PlannerConfig) -> np.ndarray:
+    import casadi as ca
+    import do_mpc
+
+    n, dt, w = config.horizon_steps, config.dt_s, config.weights
+    model = do_mpc.model.Model("discrete")
+    x = model.set_variable("_x", "x", shape=(6, 1))
+    u = model.set_variable("_u", "u", shape=(3, 1))
+    tvp = {name: model.set_variable("_tvp", name) for name in
+           ("kappa", "c_r", "r_f", "r_r", "d_lo", "d_hi")}
+    p = ca.vertcat(tvp["kappa"], tvp["c_r"], tvp["r_f"], tvp["r_r"])
+
+    def f(xx):
+        return frenet_bicycle_dynamics(xx, u, tvp["kappa"], tvp["c_r"], TRUCK)
+
+    k1 = f(x)
+    k2 = f(x + 0.5 * dt * k1)
+    k3 = f(x + 0.5 * dt * k2)
+    k4 = f(x + dt * k3)
+    model.set_rhs("x", x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4))
+    h = constraint_expressions(x, u, p, TRUCK, config.polygon_sides)
+    model.set_expression("h_front", h[: config.polygon_sides])
+    model.set_expression("h_rear", h[config.polygon_sides:])
+    model.setup()
+
+    mpc = do_mpc.controller.MPC(model)
+    mpc.settings.n_horizon = n
+    mpc.settings.t_step = dt
+    mpc.settings.store_full_solution = False
+    mpc.settings.nlpsol_opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes"}
+    f_w = w.force_per_kn * 1e-6
+    lterm = 0.5 * (w.speed * (x[State.vx] - V_REF) ** 2 + w.lateral_offset * x[State.d] ** 2
+                   + w.heading_error * x[State.dpsi] ** 2 + w.lateral_speed * x[State.vy] ** 2
+                   + w.yaw_rate * (x[State.psidot] - tvp["kappa"] * V_REF) ** 2
+                   + f_w * ca.sumsqr(u))
+    mpc.set_objective(lterm=lterm, mterm=0 * x[0])
+    mpc.set_rterm(u=np.zeros(3))
+    lower, upper = longitudinal_force_bounds_n(TRUCK)
+    mpc.bounds["lower", "_u", "u"] = np.array([-1e6, lower[0], lower[1]])
+    mpc.bounds["upper", "_u", "u"] = np.array([1e6, upper[0], upper[1]])
+    for j in range(config.polygon_sides):
+        mpc.set_nl_cons(f"front{j}", model.aux["h_front"][j], ub=0.0)
+        mpc.set_nl_cons(f"rear{j}", model.aux["h_rear"][j], ub=0.0, soft_constraint=True,
+                        penalty_term_cons=w.slack_l2)
+    mpc.set_nl_cons("d_hi", x[State.d] - tvp["d_hi"], ub=0.0, soft_constraint=True,
+                    penalty_term_cons=w.slack_l2)
+    mpc.set_nl_cons("d_lo", tvp["d_lo"] - x[State.d], ub=0.0, soft_constraint=True,
+                    penalty_term_cons=w.slack_l2)
+    template = mpc.get_tvp_template()
+    state = {"x": np.array([0.0, 0.0, 0.0, 0.0, V_REF, 0.0])}
+
+    def tvp_fun(t_now):
+        # A typical user's per-stage parameters: predicted s from constant speed.
+        x0 = state["x"]
+        guess = np.tile(x0, (n + 1, 1))
+        guess[:, State.s] = x0[State.s] + np.arange(n + 1) * dt * x0[State.vx]
+        stage = stage_parameters(guess, np.zeros((n, 3)), curvature, mu_hat, TRUCK,
+                                 config.utilization_factor)
+        lo, hi = lateral_corridor(guess, [], LANE[0], LANE[1], TRUCK, 0.5)
+        for k in range(n + 1):
+            kk = min(k, n - 1)
+            template["_tvp", k, "kappa"] = stage["p"][kk, Param.curvature]
+            template["_tvp", k, "c_r"] = stage["p"][kk, Param.rear_stiffness]
+            template["_tvp", k, "r_f"] = stage["p"][kk, Param.radius_front]
+            template["_tvp", k, "r_r"] = stage["p"][kk, Param.radius_rear]
+            template["_tvp", k, "d_lo"] = lo[kk]
+            template["_tvp", k, "d_hi"] = hi[kk]
+        return template
+
+    mpc.set_tvp_fun(tvp_fun)
+    mpc.setup()
+    xk = state["x"].copy()
+    mpc.x0 = xk
+    mpc.set_initial_guess()
+    times = []
+    for _ in range(DOMPC_STEPS):
+        state["x"] = xk
+        start = time.perf_counter()
+        u0 = np.asarray(mpc.make_step(xk.reshape(-1, 1))).ravel()
+        times.append(time.perf_counter() - start)
+        xk = plant_step(xk, u0)
+    return 1e3 * np.array(times)
+
+
+def main() -> None:
+    logging.basicConfig(level=logging.WARNING)
+    warnings.filterwarnings("ignore")
+    config = PlannerConfig(lane_d_min_m=LANE[0], lane_d_max_m=LANE[1], use_sampling=True)
+    ours = run_ours(config)
+    theirs = run_dompc(config)
+    result = {
+        "median_step_ms": round(float(np.median(ours)), 3),
+        "p99_step_ms": round(float(np.percentile(ours, 99)), 3),
+        "max_step_ms": round(float(ours.max()), 3),
+        "dompc_median_step_ms": round(float(np.median(theirs)), 3),
+        "dompc_p99_step_ms": round(float(np.percentile(theirs, 99)), 3),
+        "speedup_vs_dompc": round(float(np.median(theirs) / np.median(ours)), 1),
+        "steps": STEPS,
+        "dompc_steps": DOMPC_STEPS,
+        "horizon_steps": config.horizon_steps,
+    }
+    print(json.dumps(result))
+
+
+if __name__ == "__main__":
+    main()
