@@ -36,7 +36,7 @@ from mufusion.vehicle.planner_model import (
 STEPS = 220
 DOMPC_STEPS = 60
 V_REF = 15.0
-LANE = (-1.75, 1.75)
+LANE = (-0.45, 0.45)  # lane edges shrunk by half the truck width
 
 
 def curvature(s):

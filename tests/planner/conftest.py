@@ -9,7 +9,7 @@ from mufusion.planner.planner import TractionAdaptivePlanner
 from mufusion.vehicle.params import TRUCK
 
 # Lane plus opposing lane: room to pass an obstacle in the lane centre.
-TWO_LANES = PlannerConfig(lane_d_min_m=-1.75, lane_d_max_m=5.25)
+TWO_LANES = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=3.95)
 
 
 @pytest.fixture(scope="session")
@@ -20,5 +20,5 @@ def two_lane_planner() -> TractionAdaptivePlanner:
 @pytest.fixture(scope="session")
 def two_lane_planner_no_sampling() -> TractionAdaptivePlanner:
     return TractionAdaptivePlanner(
-        TRUCK, PlannerConfig(lane_d_min_m=-1.75, lane_d_max_m=5.25, use_sampling=False)
+        TRUCK, PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=3.95, use_sampling=False)
     )

@@ -10,7 +10,7 @@ from mufusion.planner.planner import Plan, TractionAdaptivePlanner
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.planner_model import Input
 
-CONFIG = PlannerConfig(lane_d_min_m=-1.75, lane_d_max_m=1.75)
+CONFIG = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=0.45)
 
 
 @pytest.fixture(scope="session")

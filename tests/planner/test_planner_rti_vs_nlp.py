@@ -38,7 +38,7 @@ def _closed_loop(planner, steps=30):
     xs = [x]
     for i in range(steps):
         plan = planner.step(x, 0.1 * i, _curvature, _mu, [], "cruise", 15.0,
-                            lane_d_min_m=-1.75, lane_d_max_m=1.75)
+                            lane_d_min_m=-0.45, lane_d_max_m=0.45)
         assert plan.ok
         x = _plant_step(x, plan.inputs[0], 0.1)
         xs.append(x)
@@ -47,7 +47,7 @@ def _closed_loop(planner, steps=30):
 
 @pytest.mark.parametrize("backend", ["casadi"])
 def test_rti_closed_loop_matches_reference_nlp(backend):
-    config = dict(lane_d_min_m=-1.75, lane_d_max_m=1.75, use_sampling=False)
+    config = dict(lane_d_min_m=-0.45, lane_d_max_m=0.45, use_sampling=False)
     rti = TractionAdaptivePlanner(TRUCK, PlannerConfig(**config))
     ref = TractionAdaptivePlanner(TRUCK, PlannerConfig(backend=backend, **config))
     a, b = _closed_loop(rti), _closed_loop(ref)

@@ -18,7 +18,7 @@ def _curvature(s):
 
 
 def _loop(planner, steps, mu_of_s, obstacle_at_step=None, obstacle_offset=(30.0, 0.0), v=15.0,
-          lane=(-1.75, 5.25)):
+          lane=(-0.45, 3.95)):
     planner._prev = None
     x = np.array([0.0, 0.0, 0.0, 0.0, v, 0.0])
     obstacles, plans, clearance = [], [], np.inf
@@ -40,7 +40,7 @@ def _loop(planner, steps, mu_of_s, obstacle_at_step=None, obstacle_offset=(30.0,
 
 def _speed_at_curve_entry(planner, mu):
     # One lane only: on the two-lane road the plan would widen the curve instead of slowing.
-    plans, _ = _loop(planner, 10, lambda s: mu + 0.0 * np.asarray(s), lane=(-1.75, 1.75))
+    plans, _ = _loop(planner, 10, lambda s: mu + 0.0 * np.asarray(s), lane=(-0.45, 0.45))
     plan = plans[-1]
     return float(np.interp(CURVE_START_M, plan.states[:, State.s], plan.states[:, State.vx]))
 
@@ -51,7 +51,7 @@ def test_lower_friction_ahead_slows_before_the_curve(two_lane_planner):
     assert v_low < v_high - 1.0
     # Steady cornering needs v² / R ≤ λ μ g; once in the curve the plan's speed gets there.
     plans, _ = _loop(two_lane_planner, 25, lambda s: 0.3 + 0.0 * np.asarray(s),
-                     lane=(-1.75, 1.75))
+                     lane=(-0.45, 0.45))
     states = plans[-1].states
     in_curve = states[:, State.s] >= CURVE_START_M
     v_limit = np.sqrt(0.9 * 0.3 * 9.81 * CURVE_RADIUS_M)

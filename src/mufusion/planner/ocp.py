@@ -71,8 +71,9 @@ class PlannerConfig:
     weights: CostWeights = field(default_factory=CostWeights)
     backend: Literal["acados", "casadi"] = "acados"
     use_sampling: bool = True
-    lane_d_min_m: float = -1.75
-    lane_d_max_m: float = 1.75
+    # Bounds on the reference point's lateral offset [m]: a 3.5 m lane minus half a truck width.
+    lane_d_min_m: float = -0.45
+    lane_d_max_m: float = 0.45
     obstacle_margin_m: float = 0.5
     min_speed_mps: float = 0.5
 
@@ -156,15 +157,17 @@ def lateral_corridor(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Bounds on the reference point's ``d`` per stage 1..N, shape ``(N,)`` each.
 
-    Lane edges shrink by half the vehicle width. An obstacle overlapping the vehicle's footprint at
-    the guess's predicted ``s_k`` closes the side opposite to the guess's ``d_k`` (pass left if the
-    guess is left of the obstacle's centre), which keeps the problem convex.
+    ``lane_d_min_m``/``lane_d_max_m`` bound the reference point itself (the caller has already
+    shrunk the lane or road edges by half the vehicle width, TAMP framework). An obstacle
+    overlapping the vehicle's footprint at the guess's predicted ``s_k`` closes the side opposite
+    to the guess's ``d_k`` (pass left if the guess is left of the obstacle's centre), which keeps
+    the problem convex.
     """
     s_k = guess_states[1:, State.s]
     d_k = guess_states[1:, State.d]
     half_w = 0.5 * params.width_m
-    lo = np.full(s_k.shape, lane_d_min_m + half_w)
-    hi = np.full(s_k.shape, lane_d_max_m - half_w)
+    lo = np.full(s_k.shape, float(lane_d_min_m))
+    hi = np.full(s_k.shape, float(lane_d_max_m))
     half_len = 0.5 * params.length_m
     for ob in obstacles:
         overlap = np.abs(s_k - ob.s_m) < half_len + 0.5 * ob.length_m + margin_m

@@ -144,6 +144,28 @@ class TractionAdaptivePlanner:
     ) -> Plan:
         """Plan from ``x0`` (Frenet state, shape (6,)) at time ``t_s`` [s].
 
+        Parameters
+        ----------
+        x0
+            Current state (s, d, Δψ, ψ̇, v_x, v_y) in the road-aligned frame.
+        t_s
+            Time of ``x0`` [s]; stage k of the plan is at ``t_s + k·dt``.
+        curvature_of_s, mu_hat_of_s
+            Road curvature [1/m] and friction estimate [-] as functions of absolute progress [m].
+        obstacles
+            :class:`PlannerObstacle` (or ``(s_m, d_m, length_m, width_m)`` tuples).
+        mode
+            ``"cruise"`` (track speed and offset) or ``"emergency"`` (stop short).
+        reference_speed_mps, reference_d_m
+            Cruise references.
+        lane_d_min_m, lane_d_max_m
+            Bounds on the reference point's lateral offset [m] (lane or road edges already shrunk
+            by half the vehicle width); default from the config.
+
+        Returns
+        -------
+        Plan
+
         Raises
         ------
         ValueError
@@ -215,10 +237,7 @@ class TractionAdaptivePlanner:
             )[0])
             if self._prev is not None and shifted_violation <= sc.trigger_violation_m:
                 return guess_x, guess_u, False
-            half_w = 0.5 * par.width_m
-            lateral = np.append(
-                np.linspace(lo_lane + half_w, hi_lane - half_w, sc.n_lateral), d_ref
-            )
+            lateral = np.append(np.linspace(lo_lane, hi_lane, sc.n_lateral), d_ref)
             speeds = np.append(np.asarray(sc.speed_fractions) * v_ref, x0[State.vx])
             with np.errstate(all="ignore"):  # diverging candidates are discarded below
                 xs, us = candidate_rollouts(

@@ -58,7 +58,7 @@ def violation_m(
     """Summed footprint violation [m] of trajectories ``states (N+1, 6, M)`` → ``(M,)``."""
     s, d = states[1:, State.s], states[1:, State.d]
     half_w = 0.5 * params.width_m
-    total = np.maximum(lane_d_min_m + half_w - d, 0.0) + np.maximum(d - lane_d_max_m + half_w, 0.0)
+    total = np.maximum(lane_d_min_m - d, 0.0) + np.maximum(d - lane_d_max_m, 0.0)
     for ob in obstacles:
         overlap = np.abs(s - ob.s_m) < 0.5 * params.length_m + 0.5 * ob.length_m + margin_m
         clear = 0.5 * ob.width_m + half_w + margin_m
