@@ -6,7 +6,16 @@ arguments, a progress bar, files written), never physics or estimation of its ow
 
 from __future__ import annotations
 
+import json
+import logging
+import time
+from pathlib import Path
+from typing import Annotated
+
 import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
 
 app = typer.Typer(
     name="mufusion",
@@ -18,11 +27,158 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+console = Console(stderr=True)
 
 
 @app.callback()
-def _main() -> None:
+def _main(
+    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log solver warnings.")] = False,
+) -> None:
     """mufusion: fuse camera and slip-based friction estimates and drive on them in closed loop."""
+    logging.basicConfig(
+        level=logging.INFO if verbose else logging.ERROR,
+        format="%(levelname)s %(name)s: %(message)s",
+    )
+
+
+def _fail(message: str) -> None:
+    console.print(f"[red]error:[/red] {message}")
+    raise typer.Exit(code=2)
+
+
+@app.command()
+def run(
+    scenario: Annotated[
+        str, typer.Argument(help="Built-in scenario ('turn' or 'popup') or a scenario .toml file.")
+    ],
+    config: Annotated[
+        str,
+        typer.Option(
+            "--config",
+            "-c",
+            help="Friction estimate the planner uses: GT (ground truth), L (local only), "
+            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe).",
+        ),
+    ] = "F",
+    set_: Annotated[
+        list[str] | None,
+        typer.Option("--set", help="Override a scenario field, e.g. --set friction.mu=0.89."),
+    ] = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path(
+        "results/run"
+    ),
+    gif: Annotated[bool, typer.Option(help="Also write an animated GIF of the run.")] = True,
+) -> None:
+    """Run one scenario in closed loop: writes the run log, summary.json and figures.
+
+    The exit code is 0 when the run completes, also when the vehicle crashes: that is a result.
+    """
+    from mufusion.metrics import compute_metrics
+    from mufusion.plots.run_figures import single_run_figures
+    from mufusion.scenarios import CONFIGURATIONS, load_scenario
+    from mufusion.scenarios.runner import run_scenario
+
+    if config not in CONFIGURATIONS:
+        _fail(f"--config must be one of {', '.join(CONFIGURATIONS)}, got {config!r}")
+    try:
+        cfg = load_scenario(scenario, list(set_ or []))
+    except ValueError as err:
+        _fail(str(err))
+    with _progress() as progress:
+        task = progress.add_task(f"{cfg.name} / {config}", total=cfg.duration_s)
+        log = run_scenario(cfg, config, progress=lambda t: progress.update(task, completed=t))
+        progress.update(task, completed=cfg.duration_s)
+    log.save(out / "log")
+    metrics = compute_metrics(log)
+    summary = {"scenario": cfg.name, "config": config, **metrics.to_dict()}
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    figures = single_run_figures(log, out / "figures", gif=gif)
+    _print_table([summary])
+    console.print(f"log, summary.json and {len(figures)} figures in [bold]{out}[/bold]")
+
+
+@app.command()
+def reproduce(
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path("results"),
+    jobs: Annotated[
+        int | None, typer.Option(help="Worker processes (default: one per CPU core).")
+    ] = None,
+    car: Annotated[
+        bool, typer.Option(help="Also run both scenarios with the passenger car.")
+    ] = True,
+    gif: Annotated[bool, typer.Option(help="Write animated GIFs of the key runs.")] = True,
+) -> None:
+    """Reproduce the paper: every configuration in both scenarios, figures and a report."""
+    from mufusion.plots.report import write_report
+    from mufusion.plots.run_figures import reproduction_figures
+    from mufusion.scenarios.campaign import reproduction_specs, run_campaign
+
+    if jobs is not None and jobs < 1:
+        _fail(f"--jobs must be >= 1, got {jobs}")
+    specs = reproduction_specs(include_car=car)
+    started = time.perf_counter()
+    with _progress() as progress:
+        task = progress.add_task("runs", total=len(specs))
+        results = run_campaign(
+            specs, out / "runs", jobs=jobs, on_done=lambda _s: progress.advance(task)
+        )
+    runs = [
+        {
+            "scenario": s.scenario,
+            "variant": s.variant,
+            "config": s.config,
+            "log": str(d),
+            **m.to_dict(),
+        }
+        for s, m, d in results
+    ]
+    figures = reproduction_figures(results, out / "figures", gif=gif)
+    elapsed = time.perf_counter() - started
+    summary = {"runs": runs, "elapsed_s": round(elapsed, 1)}
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    md, html = write_report(summary, out, figures)
+    _print_table(runs)
+    console.print(f"{len(runs)} runs in {elapsed:.0f} s; report: [bold]{md}[/bold], {html.name}")
+
+
+def _progress() -> Progress:
+    return Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed:.1f}/{task.total:.1f}"),
+        TimeElapsedColumn(),
+        console=console,
+    )
+
+
+def _print_table(rows: list[dict]) -> None:
+    table = Table(title="outcome")
+    cols = [
+        "scenario",
+        "variant",
+        "config",
+        "collision",
+        "impact_speed_mps",
+        "min_clearance_m",
+        "left_lane",
+        "entered_opposing_lane",
+        "utilization_vs_gt",
+        "max_force_excess",
+    ]
+    cols = [c for c in cols if any(c in r for r in rows)]
+    for c in cols:
+        table.add_column(c)
+    for r in rows:
+        table.add_row(*[_fmt(r.get(c)) for c in cols])
+    Console().print(table)
+
+
+def _fmt(v: object) -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, float):
+        return f"{v:.3g}"
+    return str(v)
 
 
 if __name__ == "__main__":  # pragma: no cover
