@@ -1,1 +1,43 @@
-"""mufusion.estimators"""
+"""mufusion.estimators: emulated camera (predictive) and slip-based (local) friction estimators.
+
+The paper (Sec. IV-A) emulates state-of-the-art estimators by their availability, foresight and
+accuracy rather than implementing them; these are those emulations, as pure functions over
+arrays (:func:`predictive_estimate`, :func:`classify`) and one small stateful estimator that
+holds its latest value (:class:`LocalEstimator`).
+"""
+
+from mufusion.estimators.classes import (
+    PAPER_CLASSES,
+    SurfaceClass,
+    classify,
+    validate_classes,
+)
+from mufusion.estimators.errors import ERROR_MODELS, ErrorModel, check_error_model
+from mufusion.estimators.local import (
+    LOCAL_MAX_ERROR,
+    UTILIZATION_THRESHOLD,
+    LocalEstimate,
+    LocalEstimator,
+)
+from mufusion.estimators.predictive import (
+    CAMERA_RANGE_M,
+    PredictiveEstimate,
+    predictive_estimate,
+)
+
+__all__ = [
+    "CAMERA_RANGE_M",
+    "ERROR_MODELS",
+    "LOCAL_MAX_ERROR",
+    "PAPER_CLASSES",
+    "UTILIZATION_THRESHOLD",
+    "ErrorModel",
+    "LocalEstimate",
+    "LocalEstimator",
+    "PredictiveEstimate",
+    "SurfaceClass",
+    "check_error_model",
+    "classify",
+    "predictive_estimate",
+    "validate_classes",
+]
