@@ -1,0 +1,197 @@
+"""Input assembly for the fusion: predictive classes ahead, the local estimate near the vehicle.
+
+Paper Sec. III, "we combine friction estimates ... into two input data vectors":
+``μ'(s), m'(s) = (μ_l, m_l)`` if the local estimate is available and ``s < s_l``, else
+``(μ_p(s), m_p(s))``. Each point also gets a group label: points that are copies of one estimate
+(the local estimate; one class segment seen by the camera) share one label, which safe mode uses.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mufusion.fusion.gp import MODES, FusionMode
+
+GRID_STEP_M = 1.0
+"""Spacing ds of the fusion grid [m] (paper: s ∈ {0, ds, …, s_f}; the authors' code used ≈ 2 m)."""
+
+HORIZON_M = 50.0
+"""Grid end s_f [m]: the predictive estimate's foresight (Table I)."""
+
+DEFAULT_GRID_M = np.arange(0.0, HORIZON_M + 0.5 * GRID_STEP_M, GRID_STEP_M)
+"""Default fusion grid 0, 1, …, 50 m (51 points)."""
+DEFAULT_GRID_M.setflags(write=False)
+
+DEFAULT_S_LOCAL_M = 5.0
+"""Reach s_l of the local estimate [m]: it replaces the predictive data at s < s_l.
+
+The local estimate measures μ under the tires (s = 0); 5 m is about a quarter of a second at
+20 m/s, short enough that the surface rarely changes within it, long enough that the fused μ̂ at
+s ≈ 0 follows the accurate local value (docs/fusion.md)."""
+
+LOCAL_MARGIN = 0.025
+"""Worst-case local estimation error max|e_l| [-] (Table I)."""
+
+LOCAL_GROUP = 0
+"""Group label of the local estimate's points; class segments are labelled 1, 2, …"""
+
+
+@dataclass(frozen=True)
+class FusionData:
+    """Fusion input data, sorted by position.
+
+    Attributes
+    ----------
+    s_m
+        Data positions ahead of the vehicle [m], shape ``(n,)``.
+    mu
+        Friction values [-], shape ``(n,)``.
+    margin
+        95 % half-widths [-], shape ``(n,)``.
+    groups
+        Integer labels, shape ``(n,)``: points with one label are copies of one estimate and share
+        its error (``LOCAL_GROUP`` for the local estimate, ``1, 2, …`` for class segments).
+
+    Raises
+    ------
+    ValueError
+        If the arrays differ in length, are not finite, or a margin is negative.
+    """
+
+    s_m: np.ndarray
+    mu: np.ndarray
+    margin: np.ndarray
+    groups: np.ndarray
+
+    def __post_init__(self) -> None:
+        arrays = {}
+        for name in ("s_m", "mu", "margin"):
+            arr = np.asarray(getattr(self, name), dtype=float).reshape(-1)
+            if not np.isfinite(arr).all():
+                raise ValueError(f"FusionData.{name} must be finite")
+            arrays[name] = arr
+        grp = np.asarray(self.groups).reshape(-1).astype(np.int64)
+        n = arrays["s_m"].size
+        if arrays["mu"].size != n or arrays["margin"].size != n or grp.size != n:
+            raise ValueError(
+                "FusionData.s_m, mu, margin and groups must have equal lengths, got "
+                f"{n}, {arrays['mu'].size}, {arrays['margin'].size} and {grp.size}"
+            )
+        if (arrays["margin"] < 0.0).any():
+            raise ValueError("FusionData.margin must be >= 0")
+        for name, arr in (*arrays.items(), ("groups", grp)):
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+
+def _runs(values: np.ndarray, margins: np.ndarray, valid: np.ndarray) -> np.ndarray:
+    """Run index per grid point: a new run starts wherever (value, margin) changes or data stop."""
+    start = np.ones(values.size, dtype=bool)
+    same = (
+        valid[1:]
+        & valid[:-1]
+        & (values[1:] == values[:-1])
+        & (margins[1:] == margins[:-1])
+    )
+    start[1:] = ~same
+    return np.cumsum(start) - 1
+
+
+def assemble_inputs(
+    s_grid_m: np.ndarray,
+    predictive_mu: np.ndarray,
+    predictive_margin: np.ndarray,
+    *,
+    local_mu: float | None = None,
+    local_margin: float = LOCAL_MARGIN,
+    s_local_m: float = DEFAULT_S_LOCAL_M,
+    mode: FusionMode = "paper",
+) -> FusionData:
+    """Combine predictive class estimates and the local estimate into fusion data (Sec. III).
+
+    Parameters
+    ----------
+    s_grid_m
+        Increasing grid positions ahead of the vehicle [m], shape ``(n,)``; s = 0 is the vehicle.
+    predictive_mu
+        Class mean value per grid point [-], shape ``(n,)``; NaN where the camera has no data
+        (e.g. beyond its 50 m foresight): such points are skipped.
+    predictive_margin
+        Class margin per grid point [-], ``>= 0`` where ``predictive_mu`` is finite.
+    local_mu
+        Local estimate [-], or None when it is unavailable (low tire utilization).
+    local_margin
+        Worst-case local error [-], ``>= 0`` (Table I: 0.025).
+    s_local_m
+        Reach s_l [m]: the local estimate replaces the predictive data at ``s < s_local_m``.
+    mode
+        ``"paper"``: as in the paper. ``"safe"``: the local estimate stops at the first change of
+        predictive class (or of camera coverage) seen ahead, since it measures the surface under
+        the tires; the points from that change on keep their predictive data.
+
+    Returns
+    -------
+    FusionData
+        Points sorted by s; ``LOCAL_GROUP`` for local points, one label per contiguous run of equal
+        predictive (value, margin).
+
+    Raises
+    ------
+    ValueError
+        If the grid is not 1-D, finite and strictly increasing, lengths differ, a margin is
+        negative or NaN where the class value is given, ``local_mu`` or ``local_margin`` is not
+        finite (or the margin < 0), ``s_local_m`` is not finite, or ``mode`` is unknown.
+
+    Examples
+    --------
+    >>> d = assemble_inputs([0.0, 1.0, 2.0], [0.5, 0.5, 0.8], [0.1, 0.1, 0.2],
+    ...                     local_mu=0.42, s_local_m=1.5)
+    >>> d.mu.tolist(), d.groups.tolist()
+    ([0.42, 0.42, 0.8], [0, 0, 2])
+    """
+    if mode not in MODES:
+        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
+    grid = np.asarray(s_grid_m, dtype=float)
+    if grid.ndim != 1 or grid.size == 0 or not np.isfinite(grid).all():
+        raise ValueError("s_grid_m must be a non-empty, finite, one-dimensional array")
+    if (np.diff(grid) <= 0.0).any():
+        raise ValueError("s_grid_m must be strictly increasing")
+    pmu = np.asarray(predictive_mu, dtype=float)
+    pmar = np.asarray(predictive_margin, dtype=float)
+    if pmu.shape != grid.shape:
+        raise ValueError(f"predictive_mu must have shape {grid.shape}, got {pmu.shape}")
+    if pmar.shape != grid.shape:
+        raise ValueError(f"predictive_margin must have shape {grid.shape}, got {pmar.shape}")
+    if np.isinf(pmu).any():
+        raise ValueError("predictive_mu must be finite or NaN (no data), got inf")
+    valid = ~np.isnan(pmu)
+    if not np.isfinite(pmar[valid]).all() or (pmar[valid] < 0.0).any():
+        raise ValueError("predictive_margin must be finite and >= 0 where predictive_mu is given")
+    if not math.isfinite(float(s_local_m)):
+        raise ValueError(f"s_local_m must be finite, got {s_local_m!r}")
+    if local_mu is not None and not math.isfinite(float(local_mu)):
+        raise ValueError(f"local_mu must be finite or None, got {local_mu!r}")
+    if not (math.isfinite(float(local_margin)) and float(local_margin) >= 0.0):
+        raise ValueError(f"local_margin must be finite and >= 0, got {local_margin!r}")
+
+    run = _runs(pmu, pmar, valid)
+    use_local = np.zeros(grid.size, dtype=bool)
+    if local_mu is not None:
+        use_local = grid < float(s_local_m)
+        if mode == "safe":
+            # Stop at the first change of class (or of coverage) ahead of the vehicle.
+            use_local &= run == run[0]
+    keep_pred = valid & ~use_local
+
+    n_local = int(use_local.sum())
+    s = np.concatenate([grid[use_local], grid[keep_pred]])
+    mu = np.concatenate([np.full(n_local, float(local_mu or 0.0)), pmu[keep_pred]])
+    margin = np.concatenate([np.full(n_local, float(local_margin)), pmar[keep_pred]])
+    groups = np.concatenate(
+        [np.full(n_local, LOCAL_GROUP, dtype=np.int64), run[keep_pred] + LOCAL_GROUP + 1]
+    )
+    order = np.argsort(s, kind="stable")
+    return FusionData(s[order], mu[order], margin[order], groups[order])
