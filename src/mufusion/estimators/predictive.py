@@ -56,8 +56,12 @@ def _read_only(a: np.ndarray) -> np.ndarray:
     return a
 
 
-def check_grid(s_ahead_m: np.ndarray, mu_true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def check_grid(
+    s_ahead_m: np.ndarray, mu_true: np.ndarray, mu_name: str = "mu_true"
+) -> tuple[np.ndarray, np.ndarray]:
     """Validate a distance-ahead grid and the true μ on it; returns float copies.
+
+    ``mu_name`` is the name of the μ argument in messages.
 
     Raises
     ------
@@ -73,10 +77,10 @@ def check_grid(s_ahead_m: np.ndarray, mu_true: np.ndarray) -> tuple[np.ndarray, 
         raise ValueError("s_ahead_m must be finite, ≥ 0 m and strictly increasing")
     if mu.shape != s.shape:
         raise ValueError(
-            f"mu_true must have the shape of s_ahead_m {s.shape}, got {mu.shape}"
+            f"{mu_name} must have the shape of s_ahead_m {s.shape}, got {mu.shape}"
         )
     if not np.all(np.isfinite(mu)) or np.any(mu <= 0.0):
-        raise ValueError("mu_true must be finite and > 0 everywhere")
+        raise ValueError(f"{mu_name} must be finite and > 0 everywhere")
     return s, mu
 
 
