@@ -76,3 +76,16 @@ def test_braking_plan_gives_braking_torques_and_slow_plan_brakes():
     cmd = ctrl.command(0.0, fast, 0.0, _plan(0.0, 0.0, 0.0, v=15.0), 0.0)
     assert cmd.torque_rear_nm < 0.0
     assert Input.fyf == 0
+
+
+def test_steer_rate_is_limited_against_the_last_command_not_the_lagging_actuator():
+    # The servo lags: the measured angle stays at 0 while the command ramps. Limiting against the
+    # measured angle would pin every command at one step; the actuator's rate allows a ramp.
+    ctrl = TrackingController(TRUCK)
+    x = np.array([0.0, 0.0, 0.0, 0.0, 20.0, 0.0])
+    step = TRUCK.max_steer_rate_radps / 50.0
+    commands = [ctrl.command(0.0, x, 0.0, _plan(4e4, 0.0, 0.0), 0.0).steer_rad for _ in range(5)]
+    assert np.allclose(np.diff(commands), step)
+    assert abs(commands[-1] - 5 * step) < 1e-12
+    ctrl.reset()
+    assert abs(ctrl.command(0.0, x, 0.0, _plan(4e4, 0.0, 0.0), 0.0).steer_rad - step) < 1e-12

@@ -103,3 +103,16 @@ def test_config_rejects_bad_values():
         PlannerConfig(polygon_sides=8)
     with pytest.raises(ValueError, match="utilization_factor"):
         PlannerConfig(utilization_factor=1.5)
+
+
+def test_evade_mode_spends_no_friction_on_traction_and_does_not_speed_up(planner):
+    planner._prev = None
+    x = np.array([0.0, 0.0, 0.0, 0.0, 18.0, 0.0])
+    obstacle = [(30.0, 0.0, 1.0, 1.0)]
+    plan = planner.step(x, 0.0, lambda s: 0 * s, lambda s: 0.9 + 0 * s, obstacle, "evade", 20.0,
+                        lane_d_min_m=-0.45, lane_d_max_m=4.0)
+    assert plan.ok
+    assert np.all(plan.inputs[:, Input.fxr] <= 1.0)
+    assert np.all(plan.states[:, 4] <= 18.0 + 0.05)
+    with pytest.raises(ValueError, match="mode"):
+        planner.step(x, 0.0, lambda s: 0 * s, lambda s: 0.9 + 0 * s, [], "sprint", 20.0)

@@ -104,3 +104,25 @@ def test_normal_loads_sum_to_weight_and_shift_forward_when_braking() -> None:
     assert fzf + fzr == pytest.approx(TRUCK.mass_kg * GRAVITY_MPS2)
     assert fzf - fzf0 == pytest.approx(TRUCK.mass_kg * 5.0 * TRUCK.cog_height_m / 3.4)
     assert fzr < fzr0
+
+
+@pytest.mark.parametrize("params", [TRUCK, CAR])
+@pytest.mark.parametrize("utilization", [0.5, 0.9, 1.0])
+def test_secant_rear_stiffness_never_promises_more_than_the_magic_formula(params, utilization):
+    from mufusion.vehicle.tires import tire_forces
+
+    mu, fz = 0.7, params.static_rear_load_n
+    secant = float(rear_cornering_stiffness_n_per_rad(params, fz, utilization))
+    tangent = float(rear_cornering_stiffness_n_per_rad(params, fz))
+    assert secant < tangent
+    # The linear force reaches the limit λ μ F_z at α*; up to there the real tire gives more.
+    alpha_star = utilization * mu * fz / secant
+    alphas = np.linspace(1e-4, alpha_star, 50)
+    real = tire_forces(0.0, alphas, fz, mu, params.tire)[1]
+    assert np.all(real >= secant * alphas - 1e-6 * fz)
+    assert abs(real[-1] - utilization * mu * fz) < 1e-6 * fz
+
+
+def test_secant_stiffness_rejects_utilization_outside_unit_interval():
+    with pytest.raises(ValueError, match="utilization"):
+        rear_cornering_stiffness_n_per_rad(TRUCK, 1e4, 1.2)

@@ -112,6 +112,7 @@ class AcadosBackend:
         ocp.constraints.idxsbx_e = np.array([0])
         ocp.constraints.idxbu = np.array([Input.fxf, Input.fxr])
         ocp.constraints.lbu, ocp.constraints.ubu = longitudinal_force_bounds_n(params)
+        self._ubu = np.array(ocp.constraints.ubu, dtype=float)
         ocp.constraints.lh = np.full(2 * ns, -1e3)
         ocp.constraints.uh = np.zeros(2 * ns)
         # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
@@ -165,10 +166,17 @@ class AcadosBackend:
         d_lo: np.ndarray,
         d_hi: np.ndarray,
         min_speed_mps: float,
+        max_drive_force_n: float | None = None,
     ) -> tuple[int, np.ndarray, np.ndarray]:
-        """One RTI step; returns ``(status, states (N+1, 6), inputs (N, 3))``."""
+        """One RTI step; returns ``(status, states (N+1, 6), inputs (N, 3))``.
+
+        ``max_drive_force_n`` lowers the rear drive-force bound for this solve (``None``: the
+        actuator's bound)."""
         s = self.solver
         n = self.config.horizon_steps
+        ubu = self._ubu.copy()
+        if max_drive_force_n is not None:
+            ubu[1] = min(ubu[1], max_drive_force_n)
         s.set(0, "lbx", x0)
         s.set(0, "ubx", x0)
         w_stage = np.diag(weights[: N_STATES + N_INPUTS])
@@ -178,6 +186,7 @@ class AcadosBackend:
             s.set(k, "p", p[k])
             s.cost_set(k, "yref", yref[k])
             s.cost_set(k, "W", w_stage)
+            s.constraints_set(k, "ubu", ubu)
             if k > 0:
                 s.constraints_set(k, "lbx", np.array([d_lo[k - 1], min_speed_mps]))
                 s.constraints_set(k, "ubx", np.array([d_hi[k - 1], 100.0]))

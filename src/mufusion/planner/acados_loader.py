@@ -12,6 +12,7 @@ import ctypes
 import functools
 import logging
 import os
+import sys
 from pathlib import Path
 from types import ModuleType
 
@@ -53,6 +54,11 @@ def load_acados_template() -> ModuleType:
     os.environ.setdefault("ACADOS_SOURCE_DIR", str(install))
     os.environ.setdefault("ACADOS_PYTHON_INTERFACE_PATH", str(acados.TEMPLATE_DIR))
     os.environ.setdefault("TERA_PATH", str(acados.TERA_PATH))
+    # The generated Makefile calls `cython` by name; with an interpreter run from a venv that was
+    # never activated, its bin/ is not on PATH and the wrapper build fails.
+    bindir = str(Path(sys.executable).parent)
+    if bindir not in os.environ.get("PATH", "").split(os.pathsep):
+        os.environ["PATH"] = bindir + os.pathsep + os.environ.get("PATH", "")
     try:
         for name in _LIBRARIES:
             ctypes.CDLL(str(install / "lib" / name), mode=ctypes.RTLD_GLOBAL)

@@ -102,16 +102,20 @@ class CasadiBackend:
         self._lbu, self._ubu = lbu, ubu
         self._n_slack = 2 * n + ns * n
 
-    def solve(self, x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi, min_speed_mps):
+    def solve(self, x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi, min_speed_mps,
+              max_drive_force_n=None):
         """Solve to convergence; returns ``(status, states (N+1, 6), inputs (N, 3))``."""
         n = self.config.horizon_steps
+        ubu = self._ubu.copy()
+        if max_drive_force_n is not None:
+            ubu[:, 2] = np.minimum(ubu[:, 2], max_drive_force_n)
         lbx_x = np.full((n + 1, N_STATES), -np.inf)
         ubx_x = np.full((n + 1, N_STATES), np.inf)
         # vx bounds at stages 1..N-1 are hard, as in the acados description.
         lbx_x[1:n, State.vx] = min_speed_mps
         ubx_x[1:n, State.vx] = _MAX_SPEED_MPS
         lbz = np.concatenate([lbx_x.ravel(), self._lbu.ravel(), np.zeros(self._n_slack)])
-        ubz = np.concatenate([ubx_x.ravel(), self._ubu.ravel(), np.full(self._n_slack, np.inf)])
+        ubz = np.concatenate([ubx_x.ravel(), ubu.ravel(), np.full(self._n_slack, np.inf)])
         z0 = np.concatenate([guess_x.ravel(), guess_u.ravel(), np.zeros(self._n_slack)])
         par = np.concatenate([p.ravel(), yref.ravel(), weights, x0, d_lo, d_hi])
         sol = self._solver(x0=z0, p=par, lbx=lbz, ubx=ubz, lbg=self._lbg, ubg=self._ubg)

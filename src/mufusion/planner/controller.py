@@ -24,6 +24,8 @@ class ControllerGains:
 
     lateral_rad_per_m: float = 0.05
     heading_rad_per_rad: float = 0.6
+    yaw_rate_rad_per_radps: float = 0.15
+    steer_preview_s: float = 0.2
     speed_1_per_s: float = 0.8
     rate_hz: float = 50.0
 
@@ -55,7 +57,12 @@ def front_slip_angle_for_force_rad(
 
 
 class TrackingController:
-    """Feed-forward + feedback plan tracker; keeps only the configuration."""
+    """Feed-forward + feedback plan tracker.
+
+    Its only state is the last steering command: the command signal is rate-limited against it.
+    Limiting against the *measured* steering angle instead would compound with the servo's lag
+    and cut the usable steering rate to a fraction of the actuator's (≈ 1/3 for the truck).
+    """
 
     def __init__(self, params: VehicleParams, config=None, gains: ControllerGains | None = None):
         self.params = params
@@ -63,6 +70,11 @@ class TrackingController:
         self.gains = gains or ControllerGains()
         if self.gains.rate_hz < 50.0:
             raise ValueError(f"rate_hz must be >= 50 Hz, got {self.gains.rate_hz}")
+        self._last_steer_cmd_rad: float | None = None
+
+    def reset(self) -> None:
+        """Forget the last steering command (the next one is limited against the measured angle)."""
+        self._last_steer_cmd_rad = None
 
     def command(
         self,
@@ -87,21 +99,33 @@ class TrackingController:
             return ActuatorCommand(float(steer_rad_now), 0.5 * brake, 0.5 * brake).clipped(par)
 
         vx = max(x[State.vx], MIN_SPEED_FOR_SLIP_MPS)
+        # The feed-forward previews the plan by the steering's lag: a planned reversal of the
+        # front force (counter-steer) must start before the plan's stage does.
+        tau_p = float(np.clip(tau + g.steer_preview_s / plan.dt_s, 0.0, n - 1e-9))
+        k_p = int(tau_p)
+        frac_p = tau_p - k_p
+        x_p = (1.0 - frac_p) * plan.states[k_p] + frac_p * plan.states[k_p + 1]
         alpha_f = front_slip_angle_for_force_rad(
-            float(u[Input.fyf]), float(plan.normal_load_front_n[k]), float(plan.mu_hat[k]),
-            par.tire,
+            float(plan.inputs[k_p, Input.fyf]), float(plan.normal_load_front_n[k_p]),
+            float(plan.mu_hat[k_p]), par.tire,
         )
-        vx_ref = max(x_ref[State.vx], MIN_SPEED_FOR_SLIP_MPS)
+        vx_ref = max(x_p[State.vx], MIN_SPEED_FOR_SLIP_MPS)
         # α_f = δ − (v_y + l_f ψ̇)/v_x, solved for δ.
-        kinematic = x_ref[State.vy] + par.cog_to_front_axle_m * x_ref[State.psidot]
+        kinematic = x_p[State.vy] + par.cog_to_front_axle_m * x_p[State.psidot]
         delta_ff = alpha_f + kinematic / vx_ref
         # Left positive: a lateral offset to the right of the plan steers left.
         delta_fb = g.lateral_rad_per_m * (x_ref[State.d] - x[State.d]) + g.heading_rad_per_rad * (
             x_ref[State.dpsi] - x[State.dpsi]
         )
+        # Yaw-rate feedback damps what the plan cannot see: a rear tire that saturates before the
+        # planner's linear rear tire says it would (over-rotation, the start of a spin).
+        delta_fb += g.yaw_rate_rad_per_radps * (x_ref[State.psidot] - x[State.psidot])
         delta = delta_ff + delta_fb
         max_step = par.max_steer_rate_radps / g.rate_hz
-        delta = float(np.clip(delta, steer_rad_now - max_step, steer_rad_now + max_step))
+        prev = steer_rad_now if self._last_steer_cmd_rad is None else self._last_steer_cmd_rad
+        delta = float(np.clip(delta, prev - max_step, prev + max_step))
+        delta = float(np.clip(delta, -par.max_steer_rad, par.max_steer_rad))
+        self._last_steer_cmd_rad = delta
 
         extra_force = par.mass_kg * g.speed_1_per_s * (x_ref[State.vx] - vx)
         fxf, fxr = float(u[Input.fxf]), float(u[Input.fxr])

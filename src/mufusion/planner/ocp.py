@@ -40,12 +40,13 @@ class CostWeights:
     """Least-squares weights (acados multiplies them by dt)."""
 
     speed: float = 1.0
-    lateral_offset: float = 0.5
+    lateral_offset: float = 3.0
     heading_error: float = 1.0
     yaw_rate: float = 1.0
     lateral_speed: float = 1.0
     force_per_kn: float = 1e-4
     emergency_speed: float = 10.0
+    evade_speed: float = 0.05
     slack_l1: float = 1e4
     slack_l2: float = 1e4
 
@@ -76,6 +77,7 @@ class PlannerConfig:
     lane_d_max_m: float = 0.45
     obstacle_margin_m: float = 0.5
     min_speed_mps: float = 0.5
+    cold_start_iterations: int = 3
 
     def __post_init__(self) -> None:
         if not 5 <= self.horizon_steps <= 200:
@@ -90,6 +92,10 @@ class PlannerConfig:
             raise ValueError(f"polygon_sides must be >= 12, got {self.polygon_sides}")
         if self.backend not in ("acados", "casadi"):
             raise ValueError(f"backend must be 'acados' or 'casadi', got {self.backend!r}")
+        if not 1 <= self.cold_start_iterations <= 20:
+            raise ValueError(
+                f"cold_start_iterations must be in [1, 20], got {self.cold_start_iterations}"
+            )
         if self.lane_d_min_m >= self.lane_d_max_m:
             raise ValueError("lane_d_min_m must be below lane_d_max_m")
 
@@ -133,7 +139,7 @@ def stage_parameters(
     fzr = np.maximum(fzr, 0.05 * params.mass_kg * 9.81)
     mu = np.clip(np.asarray(mu_hat_of_s(s_k), dtype=float), 0.05, 2.0)
     kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
-    c_r = rear_cornering_stiffness_n_per_rad(params, fzr)
+    c_r = rear_cornering_stiffness_n_per_rad(params, fzr, utilization_factor)
     radius_front = utilization_factor * mu * fzf
     radius_rear = utilization_factor * mu * fzr
     p = np.zeros((s_k.size, N_PARAMS))
@@ -154,11 +160,15 @@ def lateral_corridor(
     lane_d_max_m: float,
     params: VehicleParams,
     margin_m: float,
+    curvature_1pm: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Bounds on the reference point's ``d`` per stage 1..N, shape ``(N,)`` each.
 
     ``lane_d_min_m``/``lane_d_max_m`` bound the reference point itself (the caller has already
-    shrunk the lane or road edges by half the vehicle width, TAMP framework). An obstacle
+    shrunk the lane or road edges by half the vehicle width, TAMP framework). On a curve of
+    curvature κ (``curvature_1pm`` at the stages' predicted positions) the body's ends, aligned
+    with the lane at its middle, stick out of the curve by ``|κ| (l/2)² / 2``; that much is taken
+    off the outer bound (right of a left curve, left of a right curve). An obstacle
     overlapping the vehicle's footprint at the guess's predicted ``s_k`` closes the side opposite
     to the guess's ``d_k`` (pass left if the guess is left of the obstacle's centre), which keeps
     the problem convex.
@@ -169,6 +179,14 @@ def lateral_corridor(
     lo = np.full(s_k.shape, float(lane_d_min_m))
     hi = np.full(s_k.shape, float(lane_d_max_m))
     half_len = 0.5 * params.length_m
+    if curvature_1pm is not None:
+        kappa = np.asarray(curvature_1pm, dtype=float) * np.ones_like(s_k)
+        bulge = 0.5 * np.abs(kappa) * half_len**2
+        hi = np.where(kappa < 0.0, hi - bulge, hi)
+        lo = np.where(kappa > 0.0, lo + bulge, lo)
+        # A curve too tight for the lane leaves the midpoint rather than an empty corridor.
+        mid = 0.5 * (lo + hi)
+        lo, hi = np.minimum(lo, mid), np.maximum(hi, mid)
     for ob in obstacles:
         overlap = np.abs(s_k - ob.s_m) < half_len + 0.5 * ob.length_m + margin_m
         clear = 0.5 * ob.width_m + half_w + margin_m

@@ -136,7 +136,7 @@ class TractionAdaptivePlanner:
         curvature_of_s: Callable[[np.ndarray], np.ndarray],
         mu_hat_of_s: Callable[[np.ndarray], np.ndarray],
         obstacles: Sequence[PlannerObstacle] = (),
-        mode: Literal["cruise", "emergency"] = "cruise",
+        mode: Literal["cruise", "evade", "emergency"] = "cruise",
         reference_speed_mps: float = 10.0,
         reference_d_m: float = 0.0,
         lane_d_min_m: float | None = None,
@@ -155,7 +155,9 @@ class TractionAdaptivePlanner:
         obstacles
             :class:`PlannerObstacle` (or ``(s_m, d_m, length_m, width_m)`` tuples).
         mode
-            ``"cruise"`` (track speed and offset) or ``"emergency"`` (stop short).
+            ``"cruise"`` (track speed and offset), ``"evade"`` (obstacles ahead: speed is
+            held at most at its current value with a light weight, so the tires' friction goes to
+            the lateral manoeuvre rather than to regaining speed) or ``"emergency"`` (stop short).
         reference_speed_mps, reference_d_m
             Cruise references.
         lane_d_min_m, lane_d_max_m
@@ -174,8 +176,10 @@ class TractionAdaptivePlanner:
         x0 = np.asarray(x0, dtype=float)
         if x0.shape != (N_STATES,) or not np.all(np.isfinite(x0)):
             raise ValueError(f"x0 must be a finite array of shape (6,), got {x0!r}")
-        if mode not in ("cruise", "emergency"):
-            raise ValueError(f"mode must be 'cruise' or 'emergency', got {mode!r}")
+        if mode not in ("cruise", "evade", "emergency"):
+            raise ValueError(f"mode must be 'cruise', 'evade' or 'emergency', got {mode!r}")
+        if mode == "evade":
+            reference_speed_mps = min(reference_speed_mps, float(x0[State.vx]))
         cfg, par = self.config, self.params
         lo_lane = cfg.lane_d_min_m if lane_d_min_m is None else lane_d_min_m
         hi_lane = cfg.lane_d_max_m if lane_d_max_m is None else lane_d_max_m
@@ -192,23 +196,37 @@ class TractionAdaptivePlanner:
                 x0, guess_x, guess_u, curvature_of_s, mu_hat_of_s, obstacles, v_ref,
                 reference_d_m, lo_lane, hi_lane,
             )
-        stage = stage_parameters(
-            guess_x, guess_u, curvature_of_s, mu_hat_of_s, par, cfg.utilization_factor
-        )
-        d_lo, d_hi = lateral_corridor(guess_x, obstacles, lo_lane, hi_lane, par,
-                                      cfg.obstacle_margin_m)
-        yref, weights = self._reference(stage["curvature"], mode, reference_speed_mps,
-                                        reference_d_m)
-        status, fallback = -1, False
-        try:
-            status, xs, us = self._backend.solve(
-                x0, guess_x, guess_u, stage["p"], yref, weights, d_lo, d_hi,
-                0.0 if mode == "emergency" else cfg.min_speed_mps,
+        # One real-time iteration per step; a cold start has no converged plan to iterate from,
+        # so it takes a few (re-linearised at each iterate, as the next steps would).
+        iterations = 1 if self._prev is not None else cfg.cold_start_iterations
+        xs, us = guess_x, guess_u
+        for _ in range(iterations):
+            guess_x, guess_u = xs, us
+            stage = stage_parameters(
+                guess_x, guess_u, curvature_of_s, mu_hat_of_s, par, cfg.utilization_factor
             )
-            good = status in (0, 2) and np.all(np.isfinite(xs)) and np.all(np.isfinite(us))
-        except Exception as exc:  # never raise inside the loop
-            _log.warning("planner backend raised %r", exc)
-            good = False
+            d_lo, d_hi = lateral_corridor(
+                guess_x, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m,
+                curvature_of_s(guess_x[1:, State.s]),
+            )
+            yref, weights = self._reference(stage["curvature"], mode, reference_speed_mps,
+                                            reference_d_m)
+            status = -1
+            try:
+                status, xs, us = self._backend.solve(
+                    x0, guess_x, guess_u, stage["p"], yref, weights, d_lo, d_hi,
+                    0.0 if mode == "emergency" else cfg.min_speed_mps,
+                    # No traction while evading or stopping: the rear tires' friction is kept
+                    # for lateral force and braking.
+                    None if mode == "cruise" else 0.0,
+                )
+                good = status in (0, 2) and np.all(np.isfinite(xs)) and np.all(np.isfinite(us))
+            except Exception as exc:  # never raise inside the loop
+                _log.warning("planner backend raised %r", exc)
+                good = False
+            if not good:
+                break
+        fallback = False
         if not good:
             self.failures += 1
             fallback = True
@@ -264,7 +282,10 @@ class TractionAdaptivePlanner:
         w: CostWeights = self.config.weights
         n = self.config.horizon_steps
         f_w = w.force_per_kn * 1e-6
-        speed_w, v = (w.emergency_speed, 0.0) if mode == "emergency" else (w.speed, v_ref)
+        speed_w, v = {
+            "emergency": (w.emergency_speed, 0.0),
+            "evade": (w.evade_speed, v_ref),
+        }.get(mode, (w.speed, v_ref))
         weights = np.array([0.0, w.lateral_offset, w.heading_error, w.yaw_rate, speed_w,
                             w.lateral_speed, f_w, f_w, f_w])
         yref = np.zeros((n + 1, N_STATES + N_INPUTS))

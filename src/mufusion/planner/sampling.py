@@ -105,7 +105,7 @@ def candidate_rollouts(
         kappa = np.asarray(curvature_of_s(x[State.s]), dtype=float) * np.ones(m_count)
         mu = np.asarray(mu_hat_of_s(x[State.s]), dtype=float) * np.ones(m_count)
         fzf, fzr = normal_loads_n(ax, params)
-        c_r = rear_cornering_stiffness_n_per_rad(params, fzr)
+        c_r = rear_cornering_stiffness_n_per_rad(params, fzr, utilization_factor)
         lookahead = np.maximum(config.min_lookahead_m, config.lookahead_time_s * v)
         dpsi_des = np.arctan2(d_t - x[State.d], lookahead)
         r_des = kappa * v + config.heading_gain_1_per_s * (dpsi_des - x[State.dpsi])

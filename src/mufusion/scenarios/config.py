@@ -64,7 +64,7 @@ class FrictionConfig(_Strict):
 
 class ObstacleConfig(_Strict):
     distance_m: Annotated[float, Field(gt=0.0, le=200.0)] = 20.0
-    """Distance ahead of the vehicle's front when the obstacle appears."""
+    """Distance from the vehicle's front to the obstacle's centre when it appears."""
     lateral_offset_m: Annotated[float, Field(ge=-5.0, le=5.0)] = 0.0
     """Offset of the obstacle centre from the lane centre (left positive)."""
     length_m: PositiveFloat = 1.0
@@ -76,8 +76,9 @@ class ObstacleConfig(_Strict):
 class EstimationConfig(_Strict):
     local_error: ErrorModel = "none"
     predictive_error: ErrorModel = "none"
-    initial_local_mu: Friction = 0.8
-    """The local estimator's held value before it first becomes available."""
+    initial_local_mu: Friction | None = None
+    """The local estimator's held value before it first becomes available; ``None``: what it
+    measured (with its error model) on the road under the vehicle just before the run starts."""
     length_scale_m: Annotated[float, Field(gt=0.0, le=500.0)] | None = None
     """GP length scale; ``None`` keeps the fusion's default."""
 

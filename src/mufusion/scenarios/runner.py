@@ -61,7 +61,7 @@ def build_road(cfg: ScenarioConfig, params: VehicleParams) -> tuple[Road, float]
     obstacles: tuple[Obstacle, ...] = ()
     if cfg.obstacle is not None:
         ob = cfg.obstacle
-        s_obstacle = s0 + _front_overhang_m(params) + ob.distance_m + 0.5 * ob.length_m
+        s_obstacle = s0 + _front_overhang_m(params) + ob.distance_m
         obstacles = (
             Obstacle(
                 s_m=s_obstacle,
@@ -80,10 +80,16 @@ def build_road(cfg: ScenarioConfig, params: VehicleParams) -> tuple[Road, float]
     return road, s0
 
 
+# The planner bounds its reference point (and takes a curve's bulge off the outer side); the
+# footprint's corners reach further still when the vehicle is yawed against the lane, and the
+# plant tracks the plan to about a decimetre at the friction limit.
+FOOTPRINT_MARGIN_M = 0.1
+
+
 def planner_lane_bounds_m(cfg: ScenarioConfig, params: VehicleParams) -> tuple[float, float]:
     """Bounds on the planner's lateral offset: lane (turn) or whole road (pop-up) edges shrunk
-    by half the vehicle width (TAMP framework)."""
-    w, half = cfg.road.lane_width_m, 0.5 * params.width_m
+    by half the vehicle width (TAMP framework) and by :data:`FOOTPRINT_MARGIN_M`."""
+    w, half = cfg.road.lane_width_m, 0.5 * params.width_m + FOOTPRINT_MARGIN_M
     if cfg.name == "popup":
         return -0.5 * w + half, 1.5 * w - half
     return -0.5 * w + half, 0.5 * w - half

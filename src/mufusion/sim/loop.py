@@ -216,7 +216,7 @@ class ClosedLoop:
             return np.interp(np.asarray(s, dtype=float), grid_abs, mu_hat_grid)
 
         obstacles = self.world.planner_obstacles(t, s_ego)
-        mode = "emergency" if (self.emergency_on_obstacle and obstacles) else "cruise"
+        mode = ("emergency" if self.emergency_on_obstacle else "evade") if obstacles else "cruise"
         started = time.perf_counter()
         plan = self.planner.step(
             xf,

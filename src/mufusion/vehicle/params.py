@@ -139,7 +139,7 @@ TRUCK = VehicleParams(
     # Twin wheels per axle side, ~20 kg m² per rear axle end incl. brake drums and driveline.
     wheel_inertia_kgm2=40.0,
     max_steer_rad=0.6,
-    max_steer_rate_radps=0.6,
+    max_steer_rate_radps=0.9,
     max_drive_torque_nm=25_000.0,
     max_brake_torque_front_nm=40_000.0,
     max_brake_torque_rear_nm=30_000.0,

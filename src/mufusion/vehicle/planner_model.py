@@ -16,12 +16,15 @@ polygons then bound the whole rear force pair ``(F_xr, F_yr)``.
 
 from __future__ import annotations
 
+import functools
+import math
 from enum import IntEnum
 from typing import Any
 
 import numpy as np
+from scipy.optimize import brentq
 
-from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
+from mufusion.vehicle.params import GRAVITY_MPS2, TireParams, VehicleParams
 
 # Below this speed the slip-angle expression degenerates; the planner never plans slower than a
 # crawl in practice and the bound keeps the model finite at standstill.
@@ -64,9 +67,55 @@ def _ops(*values: Any):
     return np.sin, np.cos, np.maximum, lambda parts: np.stack(np.broadcast_arrays(*parts))
 
 
-def rear_cornering_stiffness_n_per_rad(params: VehicleParams, rear_load_n: Any) -> Any:
-    """Linear rear-axle cornering stiffness [N/rad] at a rear normal load ``rear_load_n`` [N]."""
-    return params.tire.cornering_stiffness_per_load_1_per_rad * rear_load_n
+def rear_cornering_stiffness_n_per_rad(
+    params: VehicleParams, rear_load_n: Any, utilization: float | None = None
+) -> Any:
+    """Rear-axle cornering stiffness [N/rad] of the planner's linear rear tire.
+
+    Parameters
+    ----------
+    params
+        Vehicle parameters (their :class:`TireParams` give the Magic Formula).
+    rear_load_n
+        Rear normal load [N] (array or CasADi symbol).
+    utilization
+        ``None``: the tangent stiffness at zero slip. A value λ in (0, 1]: the *secant* stiffness
+        with which the linear tire reaches ``λ μ F_z`` at the same slip angle as the Magic
+        Formula does. Below that slip the real tire gives at least the linear force, so a plan
+        whose rear force stays inside the λ-sized limit never counts on rear grip the tire cannot
+        give; with the tangent stiffness the plan over-estimates rear force near the limit (the
+        real tire's curve bends away) and an evasive manoeuvre spins the vehicle.
+
+    Raises
+    ------
+    ValueError
+        If ``utilization`` is not in (0, 1].
+    """
+    stiffness = params.tire.cornering_stiffness_per_load_1_per_rad
+    if utilization is not None:
+        stiffness = stiffness * secant_stiffness_factor(params.tire, utilization)
+    return stiffness * rear_load_n
+
+
+@functools.lru_cache(maxsize=32)
+def secant_stiffness_factor(tire: TireParams, utilization: float) -> float:
+    """Secant / tangent stiffness of the lateral Magic Formula at ``utilization`` of its peak.
+
+    The normalised curve ``F_y / (μ F_z) = sin(C atan(y − E (y − atan y)))`` with
+    ``y = B α = K α / (C μ)`` does not depend on μ, so neither does the factor. Raises
+    ValueError if ``utilization`` is not in (0, 1].
+    """
+    if not 0.0 < utilization <= 1.0:
+        raise ValueError(f"utilization must be in (0, 1], got {utilization}")
+    c, e = tire.shape_lateral, tire.curvature_lateral
+
+    def normalised(y: float) -> float:
+        return math.sin(c * math.atan(y - e * (y - math.atan(y)))) - utilization
+
+    # The curve peaks where its inner angle reaches π / (2C); search up to there.
+    peak = brentq(lambda y: c * math.atan(y - e * (y - math.atan(y))) - math.pi / 2, 1e-9, 1e3)
+    y_star = peak if utilization == 1.0 else brentq(normalised, 1e-12, peak)
+    return utilization / (c * y_star)
 
 
 def rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleParams) -> Any:
