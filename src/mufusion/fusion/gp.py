@@ -45,6 +45,13 @@ a one-point group identical to the paper's independent noise.
 _JITTER_START = 1e-12  # relative to the prior variance; only used when Cholesky fails
 _JITTER_MAX = 1e-4
 _SAME_S_TOL_M = 1e-9  # two positions closer than this are the same point [m]
+# Feature (low-rank) path: prior eigen-directions below this share of the largest eigenvalue are
+# dropped; the squared-exponential K is numerically singular there anyway (its eigenvalues decay
+# like a Gaussian), so the result equals the dense Cholesky one to ~1e-13.
+_EIG_TOL = 1e-15
+# ... and it is used only when every noise variance is at least this share of the prior variance
+# (zero or tiny margins make I + Φᵀ Σ⁻¹ Φ ill-conditioned: the dense path with jitter handles them).
+_FEATURE_MIN_NOISE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -212,16 +219,24 @@ def _check_groups(groups: object, n: int) -> np.ndarray | None:
 def _check_data(
     s_m: object, mu: object, margin: object
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    s = _as_1d("s_m", s_m)
-    y = _as_1d("mu", mu)
-    m = _as_1d("margin", margin)
-    if m.size == 1 and s.size != 1:
-        m = np.full(s.size, m[0])
+    s = np.asarray(s_m, dtype=float)
+    y = np.asarray(mu, dtype=float)
+    m = np.asarray(margin, dtype=float)
+    if m.ndim == 0 and s.ndim == 1:
+        m = np.full(s.size, float(m))
+    for name, arr in (("s_m", s), ("mu", y), ("margin", m)):
+        if arr.ndim != 1:
+            raise ValueError(f"{name} must be one-dimensional, got shape {arr.shape}")
     if y.size != s.size or m.size != s.size:
         raise ValueError(
             f"s_m, mu and margin must have equal lengths, got {s.size}, {y.size} and {m.size}"
         )
-    if (m < 0.0).any():
+    # Fast screen: any NaN or inf makes the sum non-finite; only then look closer.
+    if not math.isfinite(float(np.add.reduce(s) + np.add.reduce(y) + np.add.reduce(m))):
+        for name, arr in (("s_m", s), ("mu", y), ("margin", m)):
+            if not np.isfinite(arr).all():
+                raise ValueError(f"{name} must be finite (no NaN or inf)")
+    if s.size and np.minimum.reduce(m) < 0.0:
         raise ValueError("margin must be >= 0 (a 95 % half-width of μ)")
     return s, y, m
 
@@ -247,6 +262,131 @@ def _kernel_blocks_cached(
 def _kernel_blocks(prior: GPPrior, s: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """K(x, x) and K(x, x⋆); cached on the positions because they repeat across planning steps."""
     return _kernel_blocks_cached(prior, s.tobytes(), e.tobytes())
+
+
+@dataclass(frozen=True)
+class _Features:
+    """Eigen-features of the prior on fixed data and evaluation positions (cached per grid)."""
+
+    phi_x: np.ndarray  # (n, r) features at the data points, K(x, x) ≈ Φ_x Φ_xᵀ
+    phi_e: np.ndarray  # (m, r) features at the evaluation points
+    rest_e: np.ndarray  # (m,) prior variance in the dropped directions (≈ 1e-16)
+    outer_x: np.ndarray  # (n, r·r): row i is vec(φ_i φ_iᵀ), so Φ_xᵀ diag(p) Φ_x = p @ outer_x
+    # (m, r·r): φ_j φ_jᵀ weighted 1 on the diagonal, 2 below it, 0 above, in column-major order,
+    # so diag(Φ_e C Φ_eᵀ) = outer_e @ vec_F(tril(C)) for symmetric C given by its lower triangle.
+    outer_e: np.ndarray
+
+
+@lru_cache(maxsize=64)
+def _features_cached(prior: GPPrior, s_bytes: bytes, e_bytes: bytes) -> _Features | None:
+    s = np.frombuffer(s_bytes, dtype=float)
+    e = np.frombuffer(e_bytes, dtype=float)
+    z = np.concatenate([s, e])
+    lam, vec = np.linalg.eigh(prior.kernel(z, z))
+    keep = lam > _EIG_TOL * lam[-1]
+    r = int(keep.sum())
+    if 2 * r > s.size:
+        return None  # not low rank here: the dense Cholesky path is as fast
+    phi = vec[:, keep] * np.sqrt(lam[keep])
+    phi_x = np.ascontiguousarray(phi[: s.size])
+    phi_e = np.ascontiguousarray(phi[s.size :])
+    rest_e = np.maximum(prior.variance - np.einsum("ij,ij->i", phi_e, phi_e), 0.0)
+    outer_x = np.einsum("ia,ib->iab", phi_x, phi_x).reshape(s.size, r * r)
+    tri = np.tril(np.full((r, r), 2.0), -1) + np.eye(r)
+    outer_e = np.einsum("ja,jb,ab->jba", phi_e, phi_e, tri).reshape(e.size, r * r)
+    feats = _Features(phi_x, phi_e, rest_e, outer_x, outer_e)
+    for arr in (phi_x, phi_e, rest_e, outer_x, outer_e):
+        arr.setflags(write=False)
+    return feats
+
+
+def _posterior_features_paper(
+    f: _Features, noise_var: np.ndarray, resid: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """:func:`_posterior_features` for independent noise, with the cached outer products."""
+    r = f.phi_x.shape[1]
+    prec = 1.0 / noise_var
+    m = (prec @ f.outer_x).reshape(r, r)
+    m.flat[:: r + 1] += 1.0
+    chol, info = lapack.dpotrf(m, lower=1, clean=1, overwrite_a=1)
+    if info != 0:
+        return None
+    coef, _ = lapack.dpotrs(chol, f.phi_x.T @ (prec * resid), lower=1)
+    # M⁻¹ in the lower triangle (dpotri; the upper one stays zero from clean=1), Fortran order.
+    minv, info = lapack.dpotri(chol, lower=1, overwrite_c=1)
+    if info != 0:
+        return None
+    var = f.outer_e @ minv.ravel(order="F") + f.rest_e
+    return f.phi_e @ coef, np.sqrt(var)
+
+
+def _posterior_features(
+    feats: _Features,
+    noise_var: np.ndarray,
+    resid: np.ndarray,
+    shared: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Posterior by Bayesian linear regression on the prior's eigen-features (exact to ~1e-13).
+
+    f = Φ w with w ~ N(0, I) and K = Φ Φᵀ (eigen-decomposition of the prior on data and evaluation
+    points); y − m0 = Φ_x w + G u + ε, with u ~ N(0, I) one shared error per group (columns
+    ``shared``, safe mode) and ε ~ N(0, diag(noise_var)). Then with Ψ = [Φ_x, G]:
+    M = I + Ψᵀ Σ⁻¹ Ψ = L Lᵀ, mean = Φ_e M⁻¹ Ψᵀ Σ⁻¹ (y − m0), var = rowsum((Φ_e, 0) L⁻ᵀ)².
+    """
+    phi_x, phi_e, rest_e = feats.phi_x, feats.phi_e, feats.rest_e
+    r = phi_x.shape[1]
+    psi = phi_x if shared is None else np.concatenate([phi_x, shared], axis=1)
+    prec = 1.0 / noise_var
+    psi_w = psi * prec[:, None]
+    m = psi.T @ psi_w
+    m.flat[:: m.shape[0] + 1] += 1.0
+    chol, info = lapack.dpotrf(m, lower=1, clean=1, overwrite_a=1)
+    if info != 0:
+        return None
+    coef, _ = lapack.dpotrs(chol, psi_w.T @ resid, lower=1)
+    linv, info = lapack.dtrtri(chol, lower=1, overwrite_c=1)
+    if info != 0:
+        return None
+    # (Φ_e, 0) L⁻ᵀ = Φ_e (L⁻¹[:, :r])ᵀ; its squared row sums are the posterior variances.
+    w = phi_e @ linv[:, :r].T
+    offset = phi_e @ coef[:r]
+    var = np.square(w, out=w) @ np.ones(w.shape[1]) + rest_e
+    return offset, np.sqrt(var)
+
+
+def _latent_posterior(
+    prior: GPPrior,
+    s: np.ndarray,
+    e: np.ndarray,
+    margin: np.ndarray,
+    resid: np.ndarray,
+    groups: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Posterior mean offset and latent std at ``e``; independent noise, or shared per group."""
+    sd = margin / Z95
+    noise_var = sd * sd
+    shared = None
+    if groups is not None:
+        labels, index = np.unique(groups, return_inverse=True)
+        if 2 * labels.size <= s.size:
+            # One N(0, 1) latent per group scaled by sqrt(ρ) σ_i carries the shared error.
+            shared = np.zeros((s.size, labels.size))
+            shared[np.arange(s.size), index] = math.sqrt(SHARED_ERROR_FRACTION) * sd
+            noise_var = (1.0 - SHARED_ERROR_FRACTION) * noise_var
+    if groups is None or shared is not None:
+        if noise_var.min() >= _FEATURE_MIN_NOISE * prior.variance:
+            feats = _features_cached(prior, s.tobytes(), e.tobytes())
+            if feats is not None:
+                out = (
+                    _posterior_features_paper(feats, noise_var, resid)
+                    if shared is None
+                    else _posterior_features(feats, noise_var, resid, shared)
+                )
+                if out is not None:
+                    return out
+    kxx, kxe = _kernel_blocks(prior, s, e)
+    cov = _noise_independent(margin) if groups is None else _noise_grouped(margin, groups)
+    return _posterior(kxx, kxe, cov, resid, prior)
 
 
 def _posterior(
@@ -426,16 +566,15 @@ def _fuse_checked(
         std = np.full(e.size, prior.std)
         lower = mean - Z95 * std
         return FusedEstimate(e, mean, std, lower, lower.copy())
-    kxx, kxe = _kernel_blocks(prior, s, e)
     resid = y - prior.mean
-    offset, std = _posterior(kxx, kxe, _noise_independent(m), resid, prior)
+    offset, std = _latent_posterior(prior, s, e, m, resid)
     mean = prior.mean + offset
     lower = mean - Z95 * std
     if mode == "paper":
         return FusedEstimate(e, mean, std, lower, lower.copy())
     # Safe mode: honest posterior with one shared error per group ...
     labels = np.arange(s.size) if grp is None else grp
-    g_offset, g_std = _posterior(kxx, kxe, _noise_grouped(m, labels), resid, prior)
+    g_offset, g_std = _latent_posterior(prior, s, e, m, resid, labels)
     g_mean = prior.mean + g_offset
     g_lower = g_mean - Z95 * g_std
     # ... and μ̂ = paper lower bound capped by what the estimates guarantee (docs/fusion.md).

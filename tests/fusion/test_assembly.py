@@ -1,0 +1,143 @@
+"""Input assembly (paper Sec. III): local near the vehicle, predictive classes ahead."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mufusion.fusion import (
+    DEFAULT_GRID_M,
+    DEFAULT_S_LOCAL_M,
+    LOCAL_GROUP,
+    FusionData,
+    assemble_inputs,
+)
+
+GRID = DEFAULT_GRID_M
+
+
+def _classes(change_m: float | None, first=(0.8, 0.2), second=(0.5, 0.1)):
+    before = GRID < change_m if change_m is not None else np.ones(GRID.size, dtype=bool)
+    mu = np.where(before, first[0], second[0])
+    margin = np.where(before, first[1], second[1])
+    return mu, margin
+
+
+def test_default_grid():
+    assert GRID[0] == 0.0 and GRID[-1] == 50.0 and GRID.size == 51
+    assert np.all(np.diff(GRID) == 1.0)
+
+
+def test_predictive_only_keeps_every_point():
+    mu, margin = _classes(20.0)
+    d = assemble_inputs(GRID, mu, margin)
+    np.testing.assert_array_equal(d.s_m, GRID)
+    np.testing.assert_array_equal(d.mu, mu)
+    np.testing.assert_array_equal(d.margin, margin)
+    # Two class segments seen by the camera: two groups, none of them the local one.
+    assert set(d.groups.tolist()) == {1, 2}
+    assert (d.groups[GRID < 20.0] == 1).all() and (d.groups[GRID >= 20.0] == 2).all()
+
+
+def test_local_replaces_points_before_s_local():
+    mu, margin = _classes(None, first=(0.5, 0.1))
+    d = assemble_inputs(GRID, mu, margin, local_mu=0.425, local_margin=0.025, s_local_m=5.0)
+    local = d.s_m < 5.0
+    assert local.sum() == 5
+    np.testing.assert_array_equal(d.mu[local], 0.425)
+    np.testing.assert_array_equal(d.margin[local], 0.025)
+    np.testing.assert_array_equal(d.groups[local], LOCAL_GROUP)
+    np.testing.assert_array_equal(d.mu[~local], 0.5)
+    assert d.s_m.size == GRID.size
+
+
+def test_nan_predictive_points_are_skipped():
+    mu, margin = _classes(None, first=(0.5, 0.1))
+    mu[31:] = np.nan
+    margin[31:] = np.nan
+    d = assemble_inputs(GRID, mu, margin)
+    assert d.s_m.max() == 30.0 and d.s_m.size == 31
+    # With a local estimate, camera-blind points near the vehicle still get the local value.
+    mu[:3] = np.nan
+    d = assemble_inputs(GRID, mu, margin, local_mu=0.45)
+    np.testing.assert_array_equal(d.s_m[:5], [0.0, 1.0, 2.0, 3.0, 4.0])
+    np.testing.assert_array_equal(d.mu[:5], 0.45)
+
+
+def test_nan_gap_splits_a_class_segment():
+    mu, margin = _classes(None, first=(0.5, 0.1))
+    mu[20] = np.nan
+    d = assemble_inputs(GRID, mu, margin)
+    assert len(set(d.groups.tolist())) == 2
+
+
+def test_paper_mode_carries_local_past_a_class_change():
+    mu, margin = _classes(2.0)
+    d = assemble_inputs(GRID, mu, margin, local_mu=0.8, s_local_m=5.0, mode="paper")
+    np.testing.assert_array_equal(d.mu[d.s_m < 5.0], 0.8)
+    np.testing.assert_array_equal(d.groups[d.s_m < 5.0], LOCAL_GROUP)
+
+
+def test_safe_mode_stops_local_at_first_class_change():
+    mu, margin = _classes(2.0)
+    d = assemble_inputs(GRID, mu, margin, local_mu=0.8, s_local_m=5.0, mode="safe")
+    assert (d.groups[d.s_m < 2.0] == LOCAL_GROUP).all()
+    assert (d.groups[d.s_m >= 2.0] != LOCAL_GROUP).all()
+    np.testing.assert_array_equal(d.mu[d.s_m >= 2.0], 0.5)
+    # Without a change within reach the two modes agree.
+    mu, margin = _classes(30.0)
+    a = assemble_inputs(GRID, mu, margin, local_mu=0.8, mode="safe")
+    b = assemble_inputs(GRID, mu, margin, local_mu=0.8, mode="paper")
+    np.testing.assert_array_equal(a.mu, b.mu)
+    np.testing.assert_array_equal(a.groups, b.groups)
+
+
+def test_default_s_local():
+    mu, margin = _classes(None)
+    d = assemble_inputs(GRID, mu, margin, local_mu=0.9)
+    assert (d.groups == LOCAL_GROUP).sum() == int(np.sum(GRID < DEFAULT_S_LOCAL_M))
+
+
+def test_output_is_sorted_and_read_only():
+    mu, margin = _classes(10.0)
+    d = assemble_inputs(GRID, mu, margin, local_mu=0.7)
+    assert np.all(np.diff(d.s_m) > 0)
+    with pytest.raises(ValueError):
+        d.mu[0] = 1.0
+
+
+@pytest.mark.parametrize(
+    ("match", "kwargs"),
+    [
+        ("s_grid_m", {"s_grid_m": np.array([0.0, 2.0, 1.0])}),
+        ("s_grid_m", {"s_grid_m": np.array([])}),
+        ("predictive_mu", {"predictive_mu": np.full(50, 0.5)}),
+        ("predictive_mu", {"predictive_mu": np.full(51, np.inf)}),
+        ("predictive_margin", {"predictive_margin": np.full(51, -0.1)}),
+        ("predictive_margin", {"predictive_margin": np.full(51, np.nan)}),
+        ("local_mu", {"local_mu": float("nan")}),
+        ("local_margin", {"local_margin": -0.01}),
+        ("s_local_m", {"s_local_m": float("inf")}),
+        ("mode", {"mode": "aggressive"}),
+    ],
+)
+def test_assemble_validation(match, kwargs):
+    args = {
+        "s_grid_m": GRID,
+        "predictive_mu": np.full(51, 0.5),
+        "predictive_margin": np.full(51, 0.1),
+    }
+    args.update(kwargs)
+    rest = {k: args.pop(k) for k in list(args) if k not in ("s_grid_m", "predictive_mu",
+                                                            "predictive_margin")}
+    with pytest.raises(ValueError, match=match):
+        assemble_inputs(args["s_grid_m"], args["predictive_mu"], args["predictive_margin"], **rest)
+
+
+def test_fusion_data_validation():
+    with pytest.raises(ValueError, match="equal lengths"):
+        FusionData(np.zeros(3), np.zeros(2), np.zeros(3), np.zeros(3, dtype=int))
+    with pytest.raises(ValueError, match="margin"):
+        FusionData(np.zeros(1), np.zeros(1), -np.ones(1), np.zeros(1, dtype=int))
+    with pytest.raises(ValueError, match="mu"):
+        FusionData(np.zeros(1), np.full(1, np.nan), np.ones(1), np.zeros(1, dtype=int))
