@@ -168,7 +168,10 @@ def lateral_corridor(
     shrunk the lane or road edges by half the vehicle width, TAMP framework). On a curve of
     curvature κ (``curvature_1pm`` at the stages' predicted positions) the body's ends, aligned
     with the lane at its middle, stick out of the curve by ``|κ| (l/2)² / 2``; that much is taken
-    off the outer bound (right of a left curve, left of a right curve). An obstacle
+    off the outer bound (right of a left curve, left of a right curve). A heading error Δψ (the
+    guess's, as RTI linearises there) swings the front corners by ``a_f sin Δψ`` and the rear ones
+    by ``a_r sin Δψ`` the other way (``a_f``, ``a_r``: CoG to the body's front and rear); the
+    bounds shrink by that too. An obstacle
     overlapping the vehicle's footprint at the guess's predicted ``s_k`` closes the side opposite
     to the guess's ``d_k`` (pass left if the guess is left of the obstacle's centre), which keeps
     the problem convex.
@@ -184,9 +187,14 @@ def lateral_corridor(
         bulge = 0.5 * np.abs(kappa) * half_len**2
         hi = np.where(kappa < 0.0, hi - bulge, hi)
         lo = np.where(kappa > 0.0, lo + bulge, lo)
-        # A curve too tight for the lane leaves the midpoint rather than an empty corridor.
-        mid = 0.5 * (lo + hi)
-        lo, hi = np.minimum(lo, mid), np.maximum(hi, mid)
+    shift = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
+    a_front, a_rear = half_len + shift, half_len - shift
+    sin_dpsi = np.sin(guess_states[1:, State.dpsi])
+    hi = hi - a_front * np.maximum(sin_dpsi, 0.0) - a_rear * np.maximum(-sin_dpsi, 0.0)
+    lo = lo + a_front * np.maximum(-sin_dpsi, 0.0) + a_rear * np.maximum(sin_dpsi, 0.0)
+    # A corridor too tight for the vehicle leaves its midpoint rather than an empty interval.
+    mid = 0.5 * (lo + hi)
+    lo, hi = np.minimum(lo, mid), np.maximum(hi, mid)
     for ob in obstacles:
         overlap = np.abs(s_k - ob.s_m) < half_len + 0.5 * ob.length_m + margin_m
         clear = 0.5 * ob.width_m + half_w + margin_m
