@@ -141,6 +141,47 @@ def reproduce(
     console.print(f"{len(runs)} runs in {elapsed:.0f} s; report: [bold]{md}[/bold], {html.name}")
 
 
+@app.command("fusion-demo")
+def fusion_demo(
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output PNG file.")] = Path(
+        "results/fusion_demo.png"
+    ),
+    mode: Annotated[
+        str, typer.Option(help="Fusion mode to draw: paper, safe or both (side by side).")
+    ] = "both",
+    mu_before: Annotated[float, typer.Option(help="True μ near the vehicle [-].")] = 0.8,
+    mu_after: Annotated[float, typer.Option(help="True μ after the change [-].")] = 0.3,
+    change_ahead_m: Annotated[
+        float, typer.Option(help="Distance ahead where μ changes [m].")
+    ] = 25.0,
+    local_error: Annotated[
+        str, typer.Option(help="Local estimator error: none, worst_over, worst_under, random.")
+    ] = "none",
+    predictive_error: Annotated[
+        str, typer.Option(help="Camera error: none, worst_over, worst_under, random.")
+    ] = "none",
+    seed: Annotated[int, typer.Option(help="Seed for the 'random' error models.")] = 0,
+) -> None:
+    """Draw the GP fusion for a vehicle approaching a change of friction (cf. the paper's Fig. 2):
+    prior band, local and camera data with error bars, posterior band and the fused estimate."""
+    from mufusion.plots.fusion_demo import fusion_demo_figure
+
+    try:
+        path = fusion_demo_figure(
+            out,
+            mode=mode,
+            mu_before=mu_before,
+            mu_after=mu_after,
+            change_ahead_m=change_ahead_m,
+            local_error=local_error,
+            predictive_error=predictive_error,
+            seed=seed,
+        )
+    except ValueError as exc:
+        _fail(str(exc))
+    console.print(f"wrote {path}")
+
+
 def _progress() -> Progress:
     return Progress(
         TextColumn("[bold]{task.description}"),
