@@ -23,7 +23,8 @@ from functools import lru_cache
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-from scipy.linalg import lapack
+from scipy import linalg
+from scipy.linalg import blas, lapack
 
 if TYPE_CHECKING:
     from mufusion.fusion.assembly import FusionData
@@ -271,10 +272,6 @@ class _Features:
     phi_x: np.ndarray  # (n, r) features at the data points, K(x, x) ≈ Φ_x Φ_xᵀ
     phi_e: np.ndarray  # (m, r) features at the evaluation points
     rest_e: np.ndarray  # (m,) prior variance in the dropped directions (≈ 1e-16)
-    outer_x: np.ndarray  # (n, r·r): row i is vec(φ_i φ_iᵀ), so Φ_xᵀ diag(p) Φ_x = p @ outer_x
-    # (m, r·r): φ_j φ_jᵀ weighted 1 on the diagonal, 2 below it, 0 above, in column-major order,
-    # so diag(Φ_e C Φ_eᵀ) = outer_e @ vec_F(tril(C)) for symmetric C given by its lower triangle.
-    outer_e: np.ndarray
 
 
 @lru_cache(maxsize=64)
@@ -282,42 +279,21 @@ def _features_cached(prior: GPPrior, s_bytes: bytes, e_bytes: bytes) -> _Feature
     s = np.frombuffer(s_bytes, dtype=float)
     e = np.frombuffer(e_bytes, dtype=float)
     z = np.concatenate([s, e])
-    lam, vec = np.linalg.eigh(prior.kernel(z, z))
+    # SciPy's LAPACK, as everywhere here (see _posterior_features on mixing BLAS libraries).
+    lam, vec = linalg.eigh(prior.kernel(z, z))
     keep = lam > _EIG_TOL * lam[-1]
     r = int(keep.sum())
     if 2 * r > s.size:
         return None  # not low rank here: the dense Cholesky path is as fast
     phi = vec[:, keep] * np.sqrt(lam[keep])
-    phi_x = np.ascontiguousarray(phi[: s.size])
-    phi_e = np.ascontiguousarray(phi[s.size :])
+    # Fortran order: the BLAS calls below take them without a copy.
+    phi_x = np.asfortranarray(phi[: s.size])
+    phi_e = np.asfortranarray(phi[s.size :])
     rest_e = np.maximum(prior.variance - np.einsum("ij,ij->i", phi_e, phi_e), 0.0)
-    outer_x = np.einsum("ia,ib->iab", phi_x, phi_x).reshape(s.size, r * r)
-    tri = np.tril(np.full((r, r), 2.0), -1) + np.eye(r)
-    outer_e = np.einsum("ja,jb,ab->jba", phi_e, phi_e, tri).reshape(e.size, r * r)
-    feats = _Features(phi_x, phi_e, rest_e, outer_x, outer_e)
-    for arr in (phi_x, phi_e, rest_e, outer_x, outer_e):
+    feats = _Features(phi_x, phi_e, rest_e)
+    for arr in (phi_x, phi_e, rest_e):
         arr.setflags(write=False)
     return feats
-
-
-def _posterior_features_paper(
-    f: _Features, noise_var: np.ndarray, resid: np.ndarray
-) -> tuple[np.ndarray, np.ndarray] | None:
-    """:func:`_posterior_features` for independent noise, with the cached outer products."""
-    r = f.phi_x.shape[1]
-    prec = 1.0 / noise_var
-    m = (prec @ f.outer_x).reshape(r, r)
-    m.flat[:: r + 1] += 1.0
-    chol, info = lapack.dpotrf(m, lower=1, clean=1, overwrite_a=1)
-    if info != 0:
-        return None
-    coef, _ = lapack.dpotrs(chol, f.phi_x.T @ (prec * resid), lower=1)
-    # M⁻¹ in the lower triangle (dpotri; the upper one stays zero from clean=1), Fortran order.
-    minv, info = lapack.dpotri(chol, lower=1, overwrite_c=1)
-    if info != 0:
-        return None
-    var = f.outer_e @ minv.ravel(order="F") + f.rest_e
-    return f.phi_e @ coef, np.sqrt(var)
 
 
 def _posterior_features(
@@ -331,27 +307,32 @@ def _posterior_features(
     f = Φ w with w ~ N(0, I) and K = Φ Φᵀ (eigen-decomposition of the prior on data and evaluation
     points); y − m0 = Φ_x w + G u + ε, with u ~ N(0, I) one shared error per group (columns
     ``shared``, safe mode) and ε ~ N(0, diag(noise_var)). Then with Ψ = [Φ_x, G]:
-    M = I + Ψᵀ Σ⁻¹ Ψ = L Lᵀ, mean = Φ_e M⁻¹ Ψᵀ Σ⁻¹ (y − m0), var = rowsum((Φ_e, 0) L⁻ᵀ)².
+    M = I + Ψᵀ Σ⁻¹ Ψ = L Lᵀ, mean = Φ_e M⁻¹ Ψᵀ Σ⁻¹ (y − m0), var = rowsum(((Φ_e, 0) L⁻ᵀ)²).
+
+    All products go through SciPy's BLAS (the library of the LAPACK calls) and stay below
+    OpenBLAS's multithreading thresholds: alternating NumPy's and SciPy's OpenBLAS, or a threaded
+    product, let idle worker threads compete for the cores, which made this ~15 µs step take
+    milliseconds on a busy two-core machine.
     """
     phi_x, phi_e, rest_e = feats.phi_x, feats.phi_e, feats.rest_e
     r = phi_x.shape[1]
-    psi = phi_x if shared is None else np.concatenate([phi_x, shared], axis=1)
+    psi = phi_x if shared is None else np.asfortranarray(np.concatenate([phi_x, shared], axis=1))
     prec = 1.0 / noise_var
-    psi_w = psi * prec[:, None]
-    m = psi.T @ psi_w
+    # M = I + Ψᵀ Σ⁻¹ Ψ (lower triangle) = L Lᵀ.
+    m = blas.dsyrk(1.0, psi * np.sqrt(prec)[:, None], trans=1, lower=1)
     m.flat[:: m.shape[0] + 1] += 1.0
     chol, info = lapack.dpotrf(m, lower=1, clean=1, overwrite_a=1)
     if info != 0:
         return None
-    coef, _ = lapack.dpotrs(chol, psi_w.T @ resid, lower=1)
+    coef, _ = lapack.dpotrs(chol, blas.dgemv(1.0, psi, prec * resid, trans=1), lower=1)
     linv, info = lapack.dtrtri(chol, lower=1, overwrite_c=1)
     if info != 0:
         return None
     # (Φ_e, 0) L⁻ᵀ = Φ_e (L⁻¹[:, :r])ᵀ; its squared row sums are the posterior variances.
-    w = phi_e @ linv[:, :r].T
-    offset = phi_e @ coef[:r]
-    var = np.square(w, out=w) @ np.ones(w.shape[1]) + rest_e
-    return offset, np.sqrt(var)
+    w = blas.dgemm(1.0, phi_e, np.asfortranarray(linv[:, :r]), trans_b=1)
+    var = np.einsum("ij,ij->i", w, w)
+    var += rest_e
+    return blas.dgemv(1.0, phi_e, np.ascontiguousarray(coef[:r])), np.sqrt(var)
 
 
 def _latent_posterior(
@@ -377,11 +358,7 @@ def _latent_posterior(
         if noise_var.min() >= _FEATURE_MIN_NOISE * prior.variance:
             feats = _features_cached(prior, s.tobytes(), e.tobytes())
             if feats is not None:
-                out = (
-                    _posterior_features_paper(feats, noise_var, resid)
-                    if shared is None
-                    else _posterior_features(feats, noise_var, resid, shared)
-                )
+                out = _posterior_features(feats, noise_var, resid, shared)
                 if out is not None:
                     return out
     kxx, kxe = _kernel_blocks(prior, s, e)
@@ -402,14 +379,14 @@ def _posterior(
     chol = _robust_cholesky(a, prior.variance)
     # Alg. 2.1 (Rasmussen & Williams): V = L⁻¹ K(x, x⋆), z = L⁻¹ (y − m0);
     # mean offset = Vᵀ z, var = k(x⋆, x⋆) − colsum(V²).
-    rhs = np.empty((kxe.shape[0], kxe.shape[1] + 1))
+    rhs = np.empty((kxe.shape[0], kxe.shape[1] + 1), order="F")
     rhs[:, :-1] = kxe
     rhs[:, -1] = resid
     w, info = lapack.dtrtrs(chol, rhs, lower=1, overwrite_b=1)
     if info != 0:
         raise np.linalg.LinAlgError(f"triangular solve failed (info={info})")
     v = w[:, :-1]
-    offset = v.T @ w[:, -1]
+    offset = blas.dgemv(1.0, v, w[:, -1], trans=1)
     var = prior.variance - np.einsum("ij,ij->j", v, v)
     np.maximum(var, 0.0, out=var)
     return offset, np.sqrt(var)
