@@ -109,6 +109,7 @@ def reproduce(
     gif: Annotated[bool, typer.Option(help="Write animated GIFs of the key runs.")] = True,
 ) -> None:
     """Reproduce the paper: every configuration in both scenarios, figures and a report."""
+    from mufusion.plots.explain import explain_differences
     from mufusion.plots.report import write_report
     from mufusion.plots.run_figures import reproduction_figures
     from mufusion.scenarios.campaign import reproduction_specs, run_campaign
@@ -136,7 +137,7 @@ def reproduce(
     elapsed = time.perf_counter() - started
     summary = {"runs": runs, "elapsed_s": round(elapsed, 1)}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    md, html = write_report(summary, out, figures)
+    md, html = write_report(summary, out, figures, explain_differences(runs))
     _print_table(runs)
     console.print(f"{len(runs)} runs in {elapsed:.0f} s; report: [bold]{md}[/bold], {html.name}")
 

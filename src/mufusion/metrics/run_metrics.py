@@ -36,8 +36,11 @@ class RunMetrics:
         ``planned_utilization_at_comparison`` relative to the GT run's, minus one (paper: −32.6 %
         for P, −5.6 % for F); filled in by :func:`attach_gt_comparison`.
     max_force_excess
-        Largest planned tire force above the true limit ``μ_gt(s_k) F_z,k``, as a fraction of that
-        limit (0 when every planned force was physically available).
+        Largest planned front tire force (F_xf, F_yf: the forces the planner decides, as in the
+        paper's Fig. 3k/4k) above the true limit ``μ_gt(s_k) F_z,k``, as a fraction of that limit
+        (0 when every planned force was physically available). The rear lateral force is left
+        out: in the planner it is not a decision but follows the predicted state, and after a
+        slide its linear-tire value says nothing about what was planned.
     planner_median_ms, planner_p99_ms
         Wall-clock time per planning step.
     fallbacks
@@ -90,8 +93,7 @@ def _max_force_excess(plans: pd.DataFrame) -> float:
     if plans.empty:
         return 0.0
     front = np.hypot(plans["fxf_n"], plans["fyf_n"]) / (plans["mu_true"] * plans["fzf_n"])
-    rear = np.hypot(plans["fxr_n"], plans["fyr_n"]) / (plans["mu_true"] * plans["fzr_n"])
-    return float(max(0.0, np.nanmax(np.maximum(front, rear)) - 1.0))
+    return float(max(0.0, np.nanmax(front) - 1.0))
 
 
 def compute_metrics(log: RunLog) -> RunMetrics:
