@@ -70,3 +70,19 @@ def test_batch_zero_margin_falls_back_to_jitter():
     batch = fuse_batch(GRID, mu, margin, PAPER_PRIOR, GRID)
     row = fuse(GRID, mu[0], margin, PAPER_PRIOR, GRID)
     np.testing.assert_allclose(batch.mean[2], row.mean, atol=1e-10)
+
+
+def test_batch_shared_positions_with_absent_points():
+    # Paper mode, shared positions: the vectorized feature path; NaN removes a point exactly.
+    rng = np.random.default_rng(9)
+    mu = rng.uniform(0.1, 1.0, (30, GRID.size))
+    margin = rng.uniform(0.02, 0.3, GRID.size)
+    mu[rng.uniform(size=mu.shape) < 0.4] = np.nan
+    mu[3] = np.nan
+    batch = fuse_batch(GRID, mu, margin, PAPER_PRIOR, GRID)
+    rows = []
+    for b in range(mu.shape[0]):
+        p = ~np.isnan(mu[b])
+        rows.append(fuse(GRID[p], mu[b][p], margin[p], PAPER_PRIOR, GRID))
+    _compare(batch, rows)
+    np.testing.assert_allclose(batch.std[3], PAPER_PRIOR.std, atol=1e-12)

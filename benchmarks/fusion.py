@@ -1,0 +1,127 @@
+"""Fusion speed on the paper's 51-point problem, against scikit-learn in the same run.
+
+The problem: grid 0, 1, …, 50 m; the local estimate (0.425 ± 0.025) at s < 5 m, the wet class
+(0.5 ± 0.1) elsewhere. Each call is timed alone; the medians are reported. Also the batched form on
+1000 horizons with different class changes.
+
+Run: ``python benchmarks/fusion.py``. Prints a table and a final JSON line; numbers go to
+docs/performance.md, section "## Fusion".
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import statistics
+import sys
+import time
+
+import numpy as np
+from sklearn.gaussian_process import GaussianProcessRegressor
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel
+
+from mufusion.fusion import (
+    DEFAULT_GRID_M,
+    PAPER_PRIOR,
+    GPFusion,
+    assemble_inputs,
+    fuse,
+    fuse_batch,
+)
+
+N_OURS = 2000
+N_SKLEARN = 200
+N_BATCH = 1000
+BATCH_REPEATS = 5
+
+
+def _median_us(fn, n: int) -> float:
+    fn()  # warm-up: fills the kernel/feature caches, as in the closed loop after the first step
+    times = []
+    for _ in range(n):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times) * 1e6
+
+
+def _sklearn_fuse(s, mu, margin, s_eval):
+    kernel = ConstantKernel(PAPER_PRIOR.variance, "fixed") * RBF(
+        PAPER_PRIOR.length_scale_m, "fixed"
+    )
+    gpr = GaussianProcessRegressor(kernel=kernel, alpha=(margin / 1.96) ** 2, optimizer=None)
+    gpr.fit(s.reshape(-1, 1), mu - PAPER_PRIOR.mean)
+    mean, std = gpr.predict(s_eval.reshape(-1, 1), return_std=True)
+    return mean + PAPER_PRIOR.mean, std
+
+
+def _batch_inputs(rng: np.random.Generator):
+    mu = np.empty((N_BATCH, DEFAULT_GRID_M.size))
+    margin = np.empty_like(mu)
+    for b in range(N_BATCH):
+        change = rng.uniform(0.0, 50.0)
+        first, second = rng.choice([0.8, 0.5, 0.25], 2)
+        value = np.where(DEFAULT_GRID_M < change, first, second)
+        mar = np.select([value == 0.8, value == 0.5], [0.2, 0.1], 0.15)
+        d = assemble_inputs(DEFAULT_GRID_M, value, mar, local_mu=rng.uniform(0.2, 0.9))
+        mu[b], margin[b] = d.mu, d.margin
+    return mu, margin
+
+
+def main() -> None:
+    grid = DEFAULT_GRID_M
+    data = assemble_inputs(grid, np.full(grid.size, 0.5), np.full(grid.size, 0.1), local_mu=0.425)
+    s, mu, margin, groups = data.s_m, data.mu, data.margin, data.groups
+
+    ours = fuse(s, mu, margin, PAPER_PRIOR, grid)
+    ref_mean, ref_std = _sklearn_fuse(s, mu, margin, grid)
+    max_diff = float(max(np.abs(ours.mean - ref_mean).max(), np.abs(ours.std - ref_std).max()))
+
+    t_paper = _median_us(lambda: fuse(s, mu, margin, PAPER_PRIOR, grid), N_OURS)
+    t_safe = _median_us(
+        lambda: fuse(s, mu, margin, PAPER_PRIOR, grid, groups=groups, mode="safe"), N_OURS
+    )
+    engine = GPFusion(PAPER_PRIOR, grid)
+    t_engine = _median_us(lambda: engine.step(data), N_OURS)
+    t_sklearn = _median_us(lambda: _sklearn_fuse(s, mu, margin, grid), N_SKLEARN)
+
+    mu_b, margin_b = _batch_inputs(np.random.default_rng(0))
+    fuse_batch(grid, mu_b, margin_b, PAPER_PRIOR, grid)
+    batch_times = []
+    for _ in range(BATCH_REPEATS):
+        start = time.perf_counter()
+        fuse_batch(grid, mu_b, margin_b, PAPER_PRIOR, grid)
+        batch_times.append(time.perf_counter() - start)
+    t_batch = statistics.median(batch_times) / N_BATCH * 1e6
+
+    rows = [
+        ("fuse, paper mode", t_paper),
+        ("fuse, safe mode", t_safe),
+        ("GPFusion.step (paper, FusionData)", t_engine),
+        ("scikit-learn GaussianProcessRegressor fit+predict", t_sklearn),
+        (f"fuse_batch, paper, per horizon ({N_BATCH} horizons)", t_batch),
+    ]
+    print(
+        f"machine: nproc={os.cpu_count()}, python {platform.python_version()}, "
+        f"numpy {np.__version__}, {platform.machine()}"
+    )
+    print(f"max |ours - scikit-learn| (mean, std): {max_diff:.1e}")
+    print(f"{'case':<56} {'median µs':>10}")
+    for name, value in rows:
+        print(f"{name:<56} {value:>10.1f}")
+    print(f"speed-up vs scikit-learn (paper mode): {t_sklearn / t_paper:.0f}x")
+    result = {
+        "median_fuse_us": round(t_paper, 2),
+        "median_fuse_safe_us": round(t_safe, 2),
+        "median_gpfusion_step_us": round(t_engine, 2),
+        "median_sklearn_us": round(t_sklearn, 2),
+        "speedup_vs_sklearn": round(t_sklearn / t_paper, 1),
+        "batched_us_per_horizon": round(t_batch, 2),
+        "max_abs_diff_vs_sklearn": max_diff,
+    }
+    sys.stdout.write(json.dumps(result) + "\n")
+
+
+if __name__ == "__main__":
+    main()
