@@ -186,7 +186,8 @@ def _as_1d(name: str, value: object, *, allow_empty: bool = True) -> np.ndarray:
         raise ValueError(f"{name} must be one-dimensional, got shape {arr.shape}")
     if not allow_empty and arr.size == 0:
         raise ValueError(f"{name} must not be empty")
-    if not np.isfinite(arr).all():
+    # Fast screen: any NaN or inf makes the sum non-finite; only then look closer.
+    if not math.isfinite(float(np.add.reduce(arr))) and not np.isfinite(arr).all():
         raise ValueError(f"{name} must be finite (no NaN or inf)")
     return arr
 
@@ -298,7 +299,7 @@ def _features_cached(prior: GPPrior, s_bytes: bytes, e_bytes: bytes) -> _Feature
 
 def _posterior_features(
     feats: _Features,
-    noise_var: np.ndarray,
+    noise_sd: np.ndarray,
     resid: np.ndarray,
     shared: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -306,7 +307,7 @@ def _posterior_features(
 
     f = Φ w with w ~ N(0, I) and K = Φ Φᵀ (eigen-decomposition of the prior on data and evaluation
     points); y − m0 = Φ_x w + G u + ε, with u ~ N(0, I) one shared error per group (columns
-    ``shared``, safe mode) and ε ~ N(0, diag(noise_var)). Then with Ψ = [Φ_x, G]:
+    ``shared``, safe mode) and ε ~ N(0, diag(noise_sd²)). Then with Ψ = [Φ_x, G]:
     M = I + Ψᵀ Σ⁻¹ Ψ = L Lᵀ, mean = Φ_e M⁻¹ Ψᵀ Σ⁻¹ (y − m0), var = rowsum(((Φ_e, 0) L⁻ᵀ)²).
 
     All products go through SciPy's BLAS (the library of the LAPACK calls) and stay below
@@ -317,20 +318,21 @@ def _posterior_features(
     phi_x, phi_e, rest_e = feats.phi_x, feats.phi_e, feats.rest_e
     r = phi_x.shape[1]
     psi = phi_x if shared is None else np.asfortranarray(np.concatenate([phi_x, shared], axis=1))
-    prec = 1.0 / noise_var
+    inv_sd = 1.0 / noise_sd
+    scaled = psi * inv_sd[:, None]  # Σ^(-1/2) Ψ
     # M = I + Ψᵀ Σ⁻¹ Ψ (lower triangle) = L Lᵀ.
-    m = blas.dsyrk(1.0, psi * np.sqrt(prec)[:, None], trans=1, lower=1)
+    m = blas.dsyrk(1.0, scaled, trans=1, lower=1)
     m.flat[:: m.shape[0] + 1] += 1.0
     chol, info = lapack.dpotrf(m, lower=1, clean=1, overwrite_a=1)
     if info != 0:
         return None
-    coef, _ = lapack.dpotrs(chol, blas.dgemv(1.0, psi, prec * resid, trans=1), lower=1)
+    coef, _ = lapack.dpotrs(chol, blas.dgemv(1.0, scaled, resid * inv_sd, trans=1), lower=1)
     linv, info = lapack.dtrtri(chol, lower=1, overwrite_c=1)
     if info != 0:
         return None
     # (Φ_e, 0) L⁻ᵀ = Φ_e (L⁻¹[:, :r])ᵀ; its squared row sums are the posterior variances.
     w = blas.dgemm(1.0, phi_e, np.asfortranarray(linv[:, :r]), trans_b=1)
-    var = np.einsum("ij,ij->i", w, w)
+    var = blas.dgemv(1.0, np.square(w, out=w), np.ones(w.shape[1]))
     var += rest_e
     return blas.dgemv(1.0, phi_e, np.ascontiguousarray(coef[:r])), np.sqrt(var)
 
@@ -345,7 +347,7 @@ def _latent_posterior(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Posterior mean offset and latent std at ``e``; independent noise, or shared per group."""
     sd = margin / Z95
-    noise_var = sd * sd
+    noise_sd = sd
     shared = None
     if groups is not None:
         labels, index = np.unique(groups, return_inverse=True)
@@ -353,12 +355,12 @@ def _latent_posterior(
             # One N(0, 1) latent per group scaled by sqrt(ρ) σ_i carries the shared error.
             shared = np.zeros((s.size, labels.size))
             shared[np.arange(s.size), index] = math.sqrt(SHARED_ERROR_FRACTION) * sd
-            noise_var = (1.0 - SHARED_ERROR_FRACTION) * noise_var
+            noise_sd = math.sqrt(1.0 - SHARED_ERROR_FRACTION) * sd
     if groups is None or shared is not None:
-        if noise_var.min() >= _FEATURE_MIN_NOISE * prior.variance:
+        if np.minimum.reduce(noise_sd) >= math.sqrt(_FEATURE_MIN_NOISE) * prior.std:
             feats = _features_cached(prior, s.tobytes(), e.tobytes())
             if feats is not None:
-                out = _posterior_features(feats, noise_var, resid, shared)
+                out = _posterior_features(feats, noise_sd, resid, shared)
                 if out is not None:
                     return out
     kxx, kxe = _kernel_blocks(prior, s, e)
