@@ -459,8 +459,8 @@ def _hard_bound_envelope(
     us = s_sorted[first]
     ub = lo_sorted[first]
     idx = np.searchsorted(us, s_eval)
-    left = np.clip(idx - 1, 0, us.size - 1)
-    right = np.clip(idx, 0, us.size - 1)
+    left = np.maximum(idx - 1, 0)
+    right = np.minimum(idx, us.size - 1)
     at_left = np.abs(s_eval - us[left]) <= _SAME_S_TOL_M
     at_right = np.abs(s_eval - us[right]) <= _SAME_S_TOL_M
     bound = np.minimum(ub[left], ub[right])
