@@ -40,7 +40,7 @@ class CostWeights:
     """Least-squares weights (acados multiplies them by dt)."""
 
     speed: float = 1.0
-    lateral_offset: float = 3.0
+    lateral_offset: float = 1.0
     heading_error: float = 1.0
     yaw_rate: float = 1.0
     lateral_speed: float = 1.0
@@ -78,6 +78,7 @@ class PlannerConfig:
     obstacle_margin_m: float = 0.5
     min_speed_mps: float = 0.5
     cold_start_iterations: int = 3
+    max_cruise_accel_mps2: float = 1.5
 
     def __post_init__(self) -> None:
         if not 5 <= self.horizon_steps <= 200:
@@ -92,6 +93,10 @@ class PlannerConfig:
             raise ValueError(f"polygon_sides must be >= 12, got {self.polygon_sides}")
         if self.backend not in ("acados", "casadi"):
             raise ValueError(f"backend must be 'acados' or 'casadi', got {self.backend!r}")
+        if not 0.0 < self.max_cruise_accel_mps2 <= 10.0:
+            raise ValueError(
+                f"max_cruise_accel_mps2 must be in (0, 10] m/s², got {self.max_cruise_accel_mps2}"
+            )
         if not 1 <= self.cold_start_iterations <= 20:
             raise ValueError(
                 f"cold_start_iterations must be in [1, 20], got {self.cold_start_iterations}"
@@ -153,6 +158,10 @@ def stage_parameters(
     }
 
 
+MAX_SWING_HEADING_RAD = 0.1
+"""Largest heading error whose corner swing :func:`lateral_corridor` takes off the lane bounds."""
+
+
 def lateral_corridor(
     guess_states: np.ndarray,
     obstacles: Sequence[PlannerObstacle],
@@ -189,7 +198,11 @@ def lateral_corridor(
         lo = np.where(kappa > 0.0, lo + bulge, lo)
     shift = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
     a_front, a_rear = half_len + shift, half_len - shift
-    sin_dpsi = np.sin(guess_states[1:, State.dpsi])
+    # Only lane-keeping headings count in full: in an evasive manoeuvre the heading reaches
+    # 0.3-0.5 rad and the full swing (> 1 m each side) would close the corridor the manoeuvre
+    # needs; the obstacle margin covers the corners there.
+    sin_dpsi = np.sin(np.clip(guess_states[1:, State.dpsi], -MAX_SWING_HEADING_RAD,
+                              MAX_SWING_HEADING_RAD))
     hi = hi - a_front * np.maximum(sin_dpsi, 0.0) - a_rear * np.maximum(-sin_dpsi, 0.0)
     lo = lo + a_front * np.maximum(-sin_dpsi, 0.0) + a_rear * np.maximum(sin_dpsi, 0.0)
     # A corridor too tight for the vehicle leaves its midpoint rather than an empty interval.

@@ -217,8 +217,10 @@ class TractionAdaptivePlanner:
                     x0, guess_x, guess_u, stage["p"], yref, weights, d_lo, d_hi,
                     0.0 if mode == "emergency" else cfg.min_speed_mps,
                     # No traction while evading or stopping: the rear tires' friction is kept
-                    # for lateral force and braking.
-                    None if mode == "cruise" else 0.0,
+                    # for lateral force and braking. In cruise, traction is capped at a heavy
+                    # vehicle's acceleration, not at the friction limit: regaining speed at the
+                    # limit after an evasion leaves the driven axle no lateral reserve.
+                    par.mass_kg * cfg.max_cruise_accel_mps2 if mode == "cruise" else 0.0,
                 )
                 good = status in (0, 2) and np.all(np.isfinite(xs)) and np.all(np.isfinite(us))
             except Exception as exc:  # never raise inside the loop

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from mufusion.planner import PlannerConfig
 from mufusion.plots.report import Verdict, compare_with_paper
 from mufusion.sim.log import RunLog, load_run
 
@@ -53,7 +54,31 @@ def _explain(verdict: Verdict, run: Mapping[str, Any], by_key: Mapping) -> str |
         return _lane_text(verdict, run, log, by_key)
     if verdict.criterion == "collision" and verdict.config == "P":
         return _evasion_text(run, log)
+    if verdict.criterion == "clearance":
+        return _clearance_text(log)
     return None
+
+
+def _clearance_text(log: RunLog) -> str | None:
+    ts = log.timeseries
+    obstacles = log.meta.get("obstacles") or []
+    near = ts[ts["obstacle_active"].astype(bool) & ~ts["passed_obstacle"].astype(bool)]
+    if not obstacles or near.empty or not np.isfinite(near["clearance_m"]).any():
+        return None
+    row = near.loc[near["clearance_m"].idxmin()]
+    ob = obstacles[0]
+    half_w = 0.5 * float(log.meta["vehicle"]["width_m"])
+    margin = PlannerConfig().obstacle_margin_m
+    wanted = float(ob["d_m"]) + 0.5 * float(ob["width_m"]) + half_w + margin
+    return (
+        f"At the closest point (t = {float(row['t_s']):.2f} s, clearance "
+        f"{float(row['clearance_m']):.2f} m) the vehicle's centre was {float(row['d_m']):.2f} m "
+        f"to the side, where the planner's corridor asks for {wanted:.2f} m (obstacle and "
+        f"vehicle half-widths plus its {margin:.1f} m margin): from the state the swerve had "
+        "reached, no plan within the friction limits could open the full margin in time (the "
+        "corridor is soft, so the least-violating plan is taken), and the body's heading of "
+        f"{float(row['dpsi_rad']):.2f} rad swings its corners towards the obstacle."
+    )
 
 
 def _load(run: Mapping[str, Any]) -> RunLog | None:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from mufusion.metrics import RunMetrics, attach_gt_comparison, compute_metrics
 from mufusion.scenarios.config import load_scenario
-from mufusion.scenarios.runner import run_scenario
+from mufusion.scenarios.runner import planner_for, run_scenario
 
 
 @dataclass(frozen=True)
@@ -77,20 +77,51 @@ def run_campaign(
     out_root.mkdir(parents=True, exist_ok=True)
     workers = min(jobs or os.cpu_count() or 1, len(specs)) or 1
     results: dict[RunSpec, tuple[RunSpec, RunMetrics, Path]] = {}
+    failures: list[str] = []
     if workers == 1:
         for spec in specs:
-            results[spec] = run_spec(spec, out_root)
+            try:
+                results[spec] = _run_reporting(spec, out_root)
+            except RuntimeError as exc:
+                failures.append(str(exc))
             if on_done:
                 on_done(spec)
     else:
+        # Generated solvers are compiled once, here, so that workers only load them.
+        warm_up_solvers(specs)
         with ProcessPoolExecutor(max_workers=workers) as pool:
-            futures = [pool.submit(run_spec, spec, out_root) for spec in specs]
+            futures = {pool.submit(_run_reporting, spec, out_root): spec for spec in specs}
             for fut in as_completed(futures):
-                spec, metrics, directory = fut.result()
-                results[spec] = (spec, metrics, directory)
+                try:
+                    results[futures[fut]] = fut.result()
+                except RuntimeError as exc:
+                    failures.append(str(exc))
                 if on_done:
-                    on_done(spec)
+                    on_done(futures[fut])
+    if failures:
+        # Every other run has finished and is saved; report all failures at once.
+        raise RuntimeError(f"{len(failures)} of {len(specs)} runs failed: " + "; ".join(failures))
     return _with_gt_comparison([results[s] for s in specs])
+
+
+def _run_reporting(spec: RunSpec, out_root: Path) -> tuple[RunSpec, RunMetrics, Path]:
+    # Exceptions cross the process boundary by pickling; some (LAPACK's, Cython's) cannot, so
+    # a failure travels as a RuntimeError naming the run and the original error.
+    try:
+        return run_spec(spec, out_root)
+    except Exception as exc:
+        raise RuntimeError(f"{spec.slug}: {type(exc).__name__}: {exc}") from None
+
+
+def warm_up_solvers(specs: Iterable[RunSpec]) -> None:
+    """Build (or load from the cache) the planner of every vehicle the specs use."""
+    seen = set()
+    for spec in specs:
+        cfg = load_scenario(spec.scenario, list(spec.overrides))
+        key = (cfg.vehicle, cfg.planner.horizon_steps, cfg.planner.dt_s, cfg.planner.backend)
+        if key not in seen:
+            seen.add(key)
+            planner_for(cfg)
 
 
 def _with_gt_comparison(

@@ -95,6 +95,18 @@ def planner_lane_bounds_m(cfg: ScenarioConfig, params: VehicleParams) -> tuple[f
     return -0.5 * w + half, 0.5 * w - half
 
 
+def planner_for(cfg: ScenarioConfig) -> TractionAdaptivePlanner:
+    """The scenario's planner (its solver generated and compiled on first use, then cached)."""
+    planner_cfg = PlannerConfig(
+        horizon_steps=cfg.planner.horizon_steps,
+        dt_s=cfg.planner.dt_s,
+        utilization_factor=cfg.planner.utilization_factor,
+        backend=cfg.planner.backend,
+        use_sampling=cfg.planner.use_sampling,
+    )
+    return TractionAdaptivePlanner(vehicle_preset(cfg.vehicle), planner_cfg)
+
+
 def run_scenario(
     cfg: ScenarioConfig,
     configuration: str,
@@ -125,14 +137,8 @@ def run_scenario(
     road, s0 = build_road(cfg, params)
     world = World(road=road, to_planner_obstacle=_planner_obstacle)
     rates = LoopRates(cfg.sim.plant_rate_hz, cfg.sim.controller_rate_hz, cfg.planner.rate_hz)
-    planner_cfg = PlannerConfig(
-        horizon_steps=cfg.planner.horizon_steps,
-        dt_s=cfg.planner.dt_s,
-        utilization_factor=cfg.planner.utilization_factor,
-        backend=cfg.planner.backend,
-        use_sampling=cfg.planner.use_sampling,
-    )
-    planner = TractionAdaptivePlanner(params, planner_cfg)
+    planner = planner_for(cfg)
+    planner_cfg = planner.config
     controller = TrackingController(params, planner_cfg)
     rng = np.random.default_rng(cfg.seed)
     friction = make_configuration(

@@ -215,7 +215,7 @@ class ClosedLoop:
             # Beyond the camera's range the last estimate is held (TAMP framework).
             return np.interp(np.asarray(s, dtype=float), grid_abs, mu_hat_grid)
 
-        obstacles = self.world.planner_obstacles(t, s_ego)
+        obstacles = self.world.planner_obstacles(t, s_ego, behind_m=self.params.length_m)
         mode = ("emergency" if self.emergency_on_obstacle else "evade") if obstacles else "cruise"
         started = time.perf_counter()
         plan = self.planner.step(

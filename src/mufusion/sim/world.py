@@ -98,9 +98,19 @@ class World:
     def active_obstacles(self, t_s: float, s_ego_m: float) -> list[Obstacle]:
         return [o for o in self.road.obstacles if bool(obstacle_active(o, s_ego_m, t_s))]
 
-    def planner_obstacles(self, t_s: float, s_ego_m: float) -> Sequence[Any]:
-        """The active obstacles in the planner's description."""
-        return [self.to_planner_obstacle(o) for o in self.active_obstacles(t_s, s_ego_m)]
+    def planner_obstacles(
+        self, t_s: float, s_ego_m: float, behind_m: float = float("inf")
+    ) -> Sequence[Any]:
+        """The active obstacles in the planner's description.
+
+        Obstacles whose far end lies more than ``behind_m`` [m] behind ``s_ego_m`` are left out:
+        once passed they no longer shape the plan (nor keep it in its evasive mode).
+        """
+        return [
+            self.to_planner_obstacle(o)
+            for o in self.active_obstacles(t_s, s_ego_m)
+            if o.s_m + 0.5 * o.length_m >= s_ego_m - behind_m
+        ]
 
     def footprint_status(
         self,
