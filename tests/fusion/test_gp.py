@@ -15,6 +15,7 @@ from mufusion.fusion import (
     FusedEstimate,
     GPFusion,
     GPPrior,
+    assemble_inputs,
     fuse,
 )
 
@@ -162,3 +163,12 @@ def test_paper_popup_estimate_near_vehicle():
     margin = np.where(GRID < 5.0, 0.025, 0.2)
     est = fuse(GRID, mu, margin, PAPER_PRIOR, GRID)
     assert 0.80 <= est.mu_hat[0] < 0.865
+
+
+def test_gpfusion_step_on_assembled_data_in_safe_mode():
+    data = assemble_inputs(GRID, np.full(51, 0.5), np.full(51, 0.1), local_mu=0.425, mode="safe")
+    f = GPFusion(PAPER_PRIOR, GRID, mode="safe")
+    a = f.step(data)
+    b = fuse(data.s_m, data.mu, data.margin, PAPER_PRIOR, GRID, groups=data.groups, mode="safe")
+    np.testing.assert_array_equal(a.mu_hat, b.mu_hat)
+    np.testing.assert_allclose(a.mu_hat, 0.4, atol=1e-12)

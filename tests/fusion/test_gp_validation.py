@@ -79,3 +79,8 @@ def test_gpfusion_validation():
         GPFusion(PAPER_PRIOR, GRID, mode="fast")
     with pytest.raises(ValueError, match="s_eval_m"):
         GPFusion(PAPER_PRIOR, np.array([]))
+
+
+def test_fuse_batch_needs_a_horizon():
+    with pytest.raises(ValueError, match="mu"):
+        fuse_batch(S, np.empty((0, 2)), MARGIN, PAPER_PRIOR, GRID)
