@@ -8,8 +8,10 @@ so the caller can fall back to the CasADi backend.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import functools
+import io
 import logging
 import os
 import sys
@@ -73,11 +75,14 @@ def load_acados_template() -> ModuleType:
             link.symlink_to(Path("..") / ".." / ".." / "acados_template")
         except OSError as exc:
             raise AcadosUnavailable(f"cannot create {link}: {exc}") from exc
-    try:
-        import acados_template
-    except ImportError:
+    # The template prints a CasADi-version notice on import (it is tested against older CasADi;
+    # code generation works with ours, see docs/planner.md); it is noise in every run's output.
+    with contextlib.redirect_stdout(io.StringIO()):
         try:
-            from acados import acados_template  # type: ignore[no-redef]
-        except ImportError as exc:
-            raise AcadosUnavailable(f"acados_template import failed: {exc}") from exc
+            import acados_template
+        except ImportError:
+            try:
+                from acados import acados_template  # type: ignore[no-redef]
+            except ImportError as exc:
+                raise AcadosUnavailable(f"acados_template import failed: {exc}") from exc
     return acados_template

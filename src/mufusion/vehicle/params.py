@@ -139,6 +139,9 @@ TRUCK = VehicleParams(
     # Twin wheels per axle side, ~20 kg m² per rear axle end incl. brake drums and driveline.
     wheel_inertia_kgm2=40.0,
     max_steer_rad=0.6,
+    # Road-wheel rate of an automated steering actuator (≈ 50°/s; a 20:1 gear needs ≈ 1,000°/s at
+    # the hand wheel, an emergency human input). At 0.6 rad/s the planner's evasive plans, which
+    # have no steering-rate model, cannot be tracked and the truck spins (docs/planner.md).
     max_steer_rate_radps=0.9,
     max_drive_torque_nm=25_000.0,
     max_brake_torque_front_nm=40_000.0,
