@@ -276,6 +276,7 @@ class _Features:
     phi_x: np.ndarray  # (n, r) features at the data points, K(x, x) ≈ Φ_x Φ_xᵀ
     phi_e: np.ndarray  # (m, r) features at the evaluation points
     phi_e_t: np.ndarray  # (r, m) the same, transposed, Fortran order
+    eye: np.ndarray  # (r, r) identity, Fortran order (the prior term of M)
     rest_e: np.ndarray  # (m,) prior variance in the dropped directions (≈ 1e-16)
 
 
@@ -296,8 +297,9 @@ def _features_cached(prior: GPPrior, s_bytes: bytes, e_bytes: bytes) -> _Feature
     phi_e = np.asfortranarray(phi[s.size :])
     rest_e = np.maximum(prior.variance - np.einsum("ij,ij->i", phi_e, phi_e), 0.0)
     phi_e_t = np.asfortranarray(phi_e.T)
-    feats = _Features(phi_x, phi_e, phi_e_t, rest_e)
-    for arr in (phi_x, phi_e, phi_e_t, rest_e):
+    eye = np.eye(r, order="F")
+    feats = _Features(phi_x=phi_x, phi_e=phi_e, phi_e_t=phi_e_t, eye=eye, rest_e=rest_e)
+    for arr in (phi_x, phi_e, phi_e_t, rest_e, eye):
         arr.setflags(write=False)
     return feats
 
@@ -323,26 +325,33 @@ def _posterior_features(
     phi_x, phi_e_t, rest_e = feats.phi_x, feats.phi_e_t, feats.rest_e
     r = phi_x.shape[1]
     psi = phi_x if shared is None else np.asfortranarray(np.concatenate([phi_x, shared], axis=1))
+    k = psi.shape[1]
     inv_sd = 1.0 / noise_sd
     scaled = psi * inv_sd[:, None]  # Σ^(-1/2) Ψ
-    # M = I + Ψᵀ Σ⁻¹ Ψ (lower triangle) = L Lᵀ.
-    m = blas.dsyrk(1.0, scaled, trans=1, lower=1)
-    m.flat[:: m.shape[0] + 1] += 1.0
+    # M = I + Ψᵀ Σ⁻¹ Ψ (lower triangle; dsyrk adds onto a copy of I) = L Lᵀ.
+    eye = feats.eye if k == r else np.eye(k, order="F")
+    m = blas.dsyrk(1.0, scaled, beta=1.0, c=eye, trans=1, lower=1)
     chol, info = lapack.dpotrf(m, lower=1, clean=1, overwrite_a=1)
     if info != 0:
         return None
-    # One triangular solve for both: X = L⁻¹ [(Φ_e, 0)ᵀ | Ψᵀ Σ⁻¹ (y − m0)]. Then
-    # mean = X_eᵀ x_b (= Φ_e M⁻¹ Ψᵀ Σ⁻¹ (y − m0)) and var = column sums of X_e².
-    n_eval = phi_e_t.shape[1]
-    rhs = np.zeros((m.shape[0], n_eval + 1), order="F")
-    rhs[:r, :n_eval] = phi_e_t
-    rhs[:, n_eval] = blas.dgemv(1.0, scaled, resid * inv_sd, trans=1)
-    x, info = lapack.dtrtrs(chol, rhs, lower=1, overwrite_b=1)
+    # z = L⁻¹ Ψᵀ Σ⁻¹ (y − m0) and X_e = L⁻¹ (Φ_e, 0)ᵀ; then mean = X_eᵀ z
+    # (= Φ_e M⁻¹ Ψᵀ Σ⁻¹ (y − m0)) and var = column sums of X_e².
+    z, info = lapack.dtrtrs(
+        chol, blas.dgemv(1.0, scaled, resid * inv_sd, trans=1), lower=1, overwrite_b=1
+    )
     if info != 0:
         return None
-    x_e = x[:, :n_eval]
-    offset = blas.dgemv(1.0, x_e, x[:, n_eval], trans=1)
-    var = blas.dgemv(1.0, np.square(x_e), np.ones(x.shape[0]), trans=1)
+    if k == r:
+        rhs = phi_e_t
+    else:
+        rhs = np.zeros((k, phi_e_t.shape[1]), order="F")
+        rhs[:r] = phi_e_t
+    x_e, info = lapack.dtrtrs(chol, rhs, lower=1)
+    if info != 0:
+        return None
+    offset = blas.dgemv(1.0, x_e, z, trans=1)
+    x_e *= x_e
+    var = blas.dgemv(1.0, x_e, np.ones(k), trans=1)
     var += rest_e
     return offset, np.sqrt(var)
 
