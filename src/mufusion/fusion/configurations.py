@@ -50,7 +50,8 @@ from mufusion.estimators import (
     validate_classes,
 )
 from mufusion.estimators.predictive import check_grid
-from mufusion.fusion import PAPER_PRIOR, FusedEstimate, FusionData, GPFusion, assemble_inputs
+from mufusion.fusion.assembly import FusionData, assemble_inputs
+from mufusion.fusion.gp import PAPER_PRIOR, FusedEstimate, GPFusion
 
 CONFIGURATION_NAMES: tuple[str, ...] = ("GT", "L", "P", "F", "F-safe")
 # Clip range of every μ̂ handed to the planner [-] (see the module docstring): 0.05 is half the
