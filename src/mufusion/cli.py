@@ -142,6 +142,59 @@ def reproduce(
     console.print(f"{len(runs)} runs in {elapsed:.0f} s; report: [bold]{md}[/bold], {html.name}")
 
 
+@app.command()
+def campaign(
+    file: Annotated[Path, typer.Argument(help="Campaign TOML: scenarios, configs, grid.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path(
+        "results/campaign"
+    ),
+    jobs: Annotated[
+        int | None, typer.Option(help="Worker processes (default: one per CPU core).")
+    ] = None,
+    shard: Annotated[
+        str,
+        typer.Option(
+            help="K/N: run only the K-th of N shards (0-based), e.g. one cluster array job each; "
+            "a variant and its GT run always share a shard."
+        ),
+    ] = "0/1",
+) -> None:
+    """Run a campaign of scenario variants × configurations; writes every run's log and a
+    summary.json with a `runs` list (metrics, utilisation against the variant's GT run)."""
+    from mufusion.scenarios.campaign import campaign_specs, load_campaign, run_campaign
+
+    if jobs is not None and jobs < 1:
+        _fail(f"--jobs must be >= 1, got {jobs}")
+    parts = shard.split("/")
+    if len(parts) != 2 or not all(p.strip().isdigit() for p in parts):
+        _fail(f"--shard must be K/N with 0 <= K < N, got {shard!r}")
+    k, n = int(parts[0]), int(parts[1])
+    try:
+        specs = campaign_specs(load_campaign(file), shard=k, shards=n)
+    except ValueError as err:
+        _fail(str(err))
+    started = time.perf_counter()
+    with _progress() as progress:
+        task = progress.add_task("runs", total=len(specs))
+        try:
+            results = run_campaign(
+                specs, out / "runs", jobs=jobs, on_done=lambda _s: progress.advance(task)
+            )
+        except RuntimeError as err:  # some runs failed; the others are saved
+            _fail(str(err))
+    runs = [
+        {"scenario": s.scenario, "variant": s.variant, "config": s.config, "log": str(d),
+         **m.to_dict()}
+        for s, m, d in results
+    ]
+    elapsed = time.perf_counter() - started
+    summary = {"campaign": str(file), "shard": shard, "runs": runs, "elapsed_s": round(elapsed, 1)}
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    _print_table(runs)
+    console.print(f"{len(runs)} runs in {elapsed:.0f} s; summary: {out / 'summary.json'}")
+
+
 @app.command("fusion-demo")
 def fusion_demo(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output PNG file.")] = Path(

@@ -7,15 +7,24 @@ process pool) or on a cluster (one :func:`run_spec` per job, e.g. ``mufusion run
 
 from __future__ import annotations
 
+import itertools
 import os
+import sys
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
 from mufusion.metrics import RunMetrics, attach_gt_comparison, compute_metrics
 from mufusion.scenarios.config import load_scenario
 from mufusion.scenarios.runner import planner_for, run_scenario
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 
 @dataclass(frozen=True)
@@ -160,3 +169,113 @@ def reproduction_specs(include_car: bool = True) -> list[RunSpec]:
         for name, variant, overrides in variants
         for config in PAPER_CONFIGS
     ]
+
+
+class CampaignFile(BaseModel):
+    """A campaign as a TOML file: scenarios × configurations × the product of a parameter grid.
+
+    Example::
+
+        name = "friction sweep"
+        scenarios = ["popup"]
+        configs = ["GT", "P", "F", "F-safe"]
+        overrides = ["duration_s=4"]          # applied to every run
+        [grid]                                # every combination becomes one variant
+        "friction.mu" = [0.7, 0.8, 0.9, 1.0]
+        "obstacle.distance_m" = [18.0, 20.0, 25.0]
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    name: str = "campaign"
+    scenarios: list[str] = Field(min_length=1)
+    configs: list[str] = Field(default_factory=lambda: list(PAPER_CONFIGS), min_length=1)
+    overrides: list[str] = Field(default_factory=list)
+    grid: dict[str, list[bool | int | float | str]] = Field(default_factory=dict)
+
+    @field_validator("configs")
+    @classmethod
+    def _known_configs(cls, v: list[str]) -> list[str]:
+        unknown = [c for c in v if c not in PAPER_CONFIGS]
+        if unknown:
+            raise ValueError(f"unknown configs {unknown}; allowed: {list(PAPER_CONFIGS)}")
+        return v
+
+    @field_validator("grid")
+    @classmethod
+    def _non_empty_axes(cls, v: dict[str, list]) -> dict[str, list]:
+        empty = [k for k, values in v.items() if not values]
+        if empty:
+            raise ValueError(f"grid axes {empty} have no values")
+        return v
+
+
+def load_campaign(path: str | Path) -> CampaignFile:
+    """Read and validate a campaign file.
+
+    Raises
+    ------
+    ValueError
+        If the file is missing, not TOML, or a field is invalid (the message names it).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"campaign file {str(path)!r} does not exist")
+    try:
+        raw = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as err:
+        raise ValueError(f"campaign file {str(path)!r} is not valid TOML: {err}") from None
+    try:
+        return CampaignFile.model_validate(raw)
+    except ValidationError as err:
+        problems = "; ".join(
+            f"{'.'.join(str(p) for p in e['loc']) or '(top level)'}: {e['msg']}"
+            for e in err.errors()
+        )
+        raise ValueError(f"invalid campaign {str(path)!r}: {problems}") from None
+
+
+def campaign_specs(
+    campaign: CampaignFile, *, shard: int = 0, shards: int = 1
+) -> list[RunSpec]:
+    """The runs of ``campaign`` that belong to shard ``shard`` of ``shards``.
+
+    A variant (scenario × one grid point) is never split: its GT run, which the others are
+    compared with, stays in the same shard. Variants are dealt round-robin, so shards of one
+    campaign partition it and each can run as one job of a cluster array.
+
+    Raises
+    ------
+    ValueError
+        If ``shards`` < 1, ``shard`` is not in [0, shards), or a grid key or value is invalid for
+        a scenario (checked before anything runs).
+    """
+    if shards < 1 or not 0 <= shard < shards:
+        raise ValueError(f"shard must be in [0, shards) with shards >= 1, got {shard}/{shards}")
+    keys = list(campaign.grid)
+    points = list(itertools.product(*(campaign.grid[k] for k in keys))) or [()]
+    variants = [
+        (scenario, tuple(f"{k}={_toml_value(v)}" for k, v in zip(keys, point, strict=True)))
+        for scenario in campaign.scenarios
+        for point in points
+    ]
+    specs = []
+    for i, (scenario, grid_overrides) in enumerate(variants):
+        overrides = (*campaign.overrides, *grid_overrides)
+        load_scenario(scenario, list(overrides))  # fail before anything runs
+        if i % shards != shard:
+            continue
+        label = ", ".join(grid_overrides) or "default"
+        specs += [
+            RunSpec(scenario=scenario, config=c, variant=label, overrides=overrides)
+            for c in campaign.configs
+        ]
+    return specs
+
+
+def _toml_value(v: bool | int | float | str) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return v
+    return repr(v)
