@@ -246,31 +246,37 @@ def _progress() -> Progress:
     )
 
 
+# (summary key, short header, unit/format): short headers keep the table readable at 80 columns;
+# summary.json has the full names.
+_TABLE_COLUMNS = (
+    ("scenario", "scenario", ""),
+    ("variant", "variant", ""),
+    ("config", "cfg", ""),
+    ("collision", "crash", ""),
+    ("impact_speed_mps", "impact m/s", ""),
+    ("min_clearance_m", "clear m", ""),
+    ("left_lane", "left lane", ""),
+    ("entered_opposing_lane", "opp. lane", ""),
+    ("utilization_vs_gt", "util vs GT %", "%"),
+    ("max_force_excess", "F excess %", "%"),
+)
+
+
 def _print_table(rows: list[dict]) -> None:
-    table = Table(title="outcome")
-    cols = [
-        "scenario",
-        "variant",
-        "config",
-        "collision",
-        "impact_speed_mps",
-        "min_clearance_m",
-        "left_lane",
-        "entered_opposing_lane",
-        "utilization_vs_gt",
-        "max_force_excess",
-    ]
-    cols = [c for c in cols if any(c in r for r in rows)]
-    for c in cols:
-        table.add_column(c)
+    table = Table(title="outcome (full names and all metrics in summary.json)")
+    cols = [c for c in _TABLE_COLUMNS if any(c[0] in r for r in rows)]
+    for _, header, _ in cols:
+        table.add_column(header, overflow="fold")
     for r in rows:
-        table.add_row(*[_fmt(r.get(c)) for c in cols])
+        table.add_row(*[_fmt(r.get(key), unit) for key, _, unit in cols])
     Console().print(table)
 
 
-def _fmt(v: object) -> str:
+def _fmt(v: object, unit: str = "") -> str:
     if v is None:
         return "–"
+    if unit == "%" and isinstance(v, int | float) and not isinstance(v, bool):
+        return f"{100 * v:+.1f}"
     if isinstance(v, float):
         return f"{v:.3g}"
     return str(v)
