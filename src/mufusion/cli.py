@@ -112,27 +112,13 @@ def reproduce(
     from mufusion.plots.explain import explain_differences
     from mufusion.plots.report import write_report
     from mufusion.plots.run_figures import reproduction_figures
-    from mufusion.scenarios.campaign import reproduction_specs, run_campaign
+    from mufusion.scenarios.campaign import reproduction_specs
 
     if jobs is not None and jobs < 1:
         _fail(f"--jobs must be >= 1, got {jobs}")
     specs = reproduction_specs(include_car=car)
     started = time.perf_counter()
-    with _progress() as progress:
-        task = progress.add_task("runs", total=len(specs))
-        results = run_campaign(
-            specs, out / "runs", jobs=jobs, on_done=lambda _s: progress.advance(task)
-        )
-    runs = [
-        {
-            "scenario": s.scenario,
-            "variant": s.variant,
-            "config": s.config,
-            "log": str(d),
-            **m.to_dict(),
-        }
-        for s, m, d in results
-    ]
+    results, runs = _run_specs(specs, out, jobs)
     figures = reproduction_figures(results, out / "figures", gif=gif)
     elapsed = time.perf_counter() - started
     summary = {"runs": runs, "elapsed_s": round(elapsed, 1)}
@@ -161,7 +147,7 @@ def campaign(
 ) -> None:
     """Run a campaign of scenario variants × configurations; writes every run's log and a
     summary.json with a `runs` list (metrics, utilisation against the variant's GT run)."""
-    from mufusion.scenarios.campaign import campaign_specs, load_campaign, run_campaign
+    from mufusion.scenarios.campaign import campaign_specs, load_campaign
 
     if jobs is not None and jobs < 1:
         _fail(f"--jobs must be >= 1, got {jobs}")
@@ -174,19 +160,7 @@ def campaign(
     except ValueError as err:
         _fail(str(err))
     started = time.perf_counter()
-    with _progress() as progress:
-        task = progress.add_task("runs", total=len(specs))
-        try:
-            results = run_campaign(
-                specs, out / "runs", jobs=jobs, on_done=lambda _s: progress.advance(task)
-            )
-        except RuntimeError as err:  # some runs failed; the others are saved
-            _fail(str(err))
-    runs = [
-        {"scenario": s.scenario, "variant": s.variant, "config": s.config, "log": str(d),
-         **m.to_dict()}
-        for s, m, d in results
-    ]
+    _, runs = _run_specs(specs, out, jobs)
     elapsed = time.perf_counter() - started
     summary = {"campaign": str(file), "shard": shard, "runs": runs, "elapsed_s": round(elapsed, 1)}
     out.mkdir(parents=True, exist_ok=True)
@@ -234,6 +208,26 @@ def fusion_demo(
     except ValueError as exc:
         _fail(str(exc))
     console.print(f"wrote {path}")
+
+
+def _run_specs(specs: list, out: Path, jobs: int | None) -> tuple[list, list[dict]]:
+    """Run a campaign's specs under a progress bar; its results and their ``runs`` entries."""
+    from mufusion.scenarios.campaign import run_campaign
+
+    with _progress() as progress:
+        task = progress.add_task("runs", total=len(specs))
+        try:
+            results = run_campaign(
+                specs, out / "runs", jobs=jobs, on_done=lambda _s: progress.advance(task)
+            )
+        except RuntimeError as err:  # some runs failed; the others are saved
+            _fail(str(err))
+    runs = [
+        {"scenario": s.scenario, "variant": s.variant, "config": s.config, "log": str(d),
+         **m.to_dict()}
+        for s, m, d in results
+    ]
+    return results, runs
 
 
 def _progress() -> Progress:
