@@ -13,6 +13,7 @@ ORDER = [
     "vehicle",
     "estimators",
     "fusion",
+    "configurations",
     "planner",
     "sim",
     "scenarios",

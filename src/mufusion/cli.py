@@ -73,13 +73,14 @@ def run(
 
     The exit code is 0 when the run completes, also when the vehicle crashes: that is a result.
     """
+    from mufusion.configurations import CONFIGURATION_NAMES
     from mufusion.metrics import compute_metrics
     from mufusion.plots.run_figures import single_run_figures
-    from mufusion.scenarios import CONFIGURATIONS, load_scenario
+    from mufusion.scenarios import load_scenario
     from mufusion.scenarios.runner import run_scenario
 
-    if config not in CONFIGURATIONS:
-        _fail(f"--config must be one of {', '.join(CONFIGURATIONS)}, got {config!r}")
+    if config not in CONFIGURATION_NAMES:
+        _fail(f"--config must be one of {', '.join(CONFIGURATION_NAMES)}, got {config!r}")
     try:
         cfg = load_scenario(scenario, list(set_ or []))
     except ValueError as err:

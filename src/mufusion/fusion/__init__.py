@@ -15,12 +15,6 @@ from mufusion.fusion.assembly import (
     FusionData,
     assemble_inputs,
 )
-from mufusion.fusion.configurations import (
-    CONFIGURATION_NAMES,
-    FrictionConfiguration,
-    FrictionEstimate,
-    make_configuration,
-)
 from mufusion.fusion.gp import (
     MODES,
     PAPER_LENGTH_SCALE_M,
@@ -36,7 +30,6 @@ from mufusion.fusion.gp import (
 )
 
 __all__ = [
-    "CONFIGURATION_NAMES",
     "DEFAULT_GRID_M",
     "DEFAULT_S_LOCAL_M",
     "GRID_STEP_M",
@@ -48,8 +41,6 @@ __all__ = [
     "PAPER_PRIOR",
     "SHARED_ERROR_FRACTION",
     "Z95",
-    "FrictionConfiguration",
-    "FrictionEstimate",
     "FusedEstimate",
     "FusionData",
     "FusionMode",
@@ -58,5 +49,4 @@ __all__ = [
     "assemble_inputs",
     "fuse",
     "fuse_batch",
-    "make_configuration",
 ]

@@ -19,9 +19,9 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from mufusion.configurations import FrictionEstimate, make_configuration
 from mufusion.estimators import CAMERA_RANGE_M
 from mufusion.fusion import LOCAL_GROUP, PAPER_PRIOR
-from mufusion.fusion.configurations import FrictionEstimate, make_configuration
 from mufusion.plots._common import save_figure
 
 # Two-sided 95 % quantile of the standard normal (paper Sec. III: margins are 95 % intervals).

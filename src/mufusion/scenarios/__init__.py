@@ -2,7 +2,6 @@
 
 from mufusion.scenarios.config import (
     BUILTIN_SCENARIOS,
-    CONFIGURATIONS,
     ScenarioConfig,
     apply_overrides,
     load_scenario,
@@ -11,7 +10,6 @@ from mufusion.scenarios.config import (
 
 __all__ = [
     "BUILTIN_SCENARIOS",
-    "CONFIGURATIONS",
     "ScenarioConfig",
     "apply_overrides",
     "load_scenario",

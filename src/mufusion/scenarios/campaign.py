@@ -17,6 +17,7 @@ from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from mufusion.configurations import CONFIGURATION_NAMES
 from mufusion.metrics import RunMetrics, attach_gt_comparison, compute_metrics
 from mufusion.scenarios.config import load_scenario
 from mufusion.scenarios.runner import planner_for, run_scenario
@@ -145,7 +146,7 @@ def _with_gt_comparison(
     return out
 
 
-PAPER_CONFIGS: tuple[str, ...] = ("GT", "L", "P", "F", "F-safe")
+PAPER_CONFIGS: tuple[str, ...] = CONFIGURATION_NAMES
 
 
 def reproduction_specs(include_car: bool = True) -> list[RunSpec]:

@@ -21,8 +21,6 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 ErrorModel = Literal["none", "worst_over", "worst_under", "random"]
-Configuration = Literal["GT", "L", "P", "F", "F-safe"]
-CONFIGURATIONS: tuple[str, ...] = ("GT", "L", "P", "F", "F-safe")
 
 PositiveFloat = Annotated[float, Field(gt=0.0, allow_inf_nan=False)]
 NonNegFloat = Annotated[float, Field(ge=0.0, allow_inf_nan=False)]

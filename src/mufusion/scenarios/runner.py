@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from mufusion.fusion.configurations import make_configuration
+from mufusion.configurations import Configuration, make_configuration
 from mufusion.planner import (
     PlannerConfig,
     PlannerObstacle,
@@ -22,7 +22,7 @@ from mufusion.planner import (
     TractionAdaptivePlanner,
 )
 from mufusion.road import FrictionMap, Obstacle, Road, straight_road, turn_road
-from mufusion.scenarios.config import CONFIGURATIONS, ScenarioConfig
+from mufusion.scenarios.config import ScenarioConfig
 from mufusion.sim.log import RunLog
 from mufusion.sim.loop import ClosedLoop, LoopRates
 from mufusion.sim.world import World
@@ -109,7 +109,7 @@ def planner_for(cfg: ScenarioConfig) -> TractionAdaptivePlanner:
 
 def run_scenario(
     cfg: ScenarioConfig,
-    configuration: str,
+    configuration: Configuration | str,
     *,
     progress: Callable[[float], None] | None = None,
 ) -> RunLog:
@@ -129,10 +129,7 @@ def run_scenario(
     ValueError
         If ``configuration`` is unknown.
     """
-    if configuration not in CONFIGURATIONS:
-        raise ValueError(
-            f"configuration must be one of {list(CONFIGURATIONS)}, got {configuration!r}"
-        )
+    configuration = Configuration.parse(configuration)
     params = vehicle_preset(cfg.vehicle)
     road, s0 = build_road(cfg, params)
     world = World(road=road, to_planner_obstacle=_planner_obstacle)
@@ -179,7 +176,7 @@ def _planner_obstacle(o: Obstacle) -> PlannerObstacle:
 
 def _meta(
     cfg: ScenarioConfig,
-    configuration: str,
+    configuration: Configuration,
     params: VehicleParams,
     road: Road,
     s0: float,
@@ -204,17 +201,10 @@ def _meta(
                 "corners_y_m": corners[:, 1].tolist(),
             }
         )
-    labels = {
-        "GT": "GT (ground truth)",
-        "L": "L (local only)",
-        "P": "P (predictive only)",
-        "F": "F (fused, paper mode)",
-        "F-safe": "F-safe (fused, safe mode)",
-    }
     return {
         "scenario": cfg.model_dump(mode="json"),
-        "configuration": configuration,
-        "label": labels[configuration],
+        "configuration": configuration.value,
+        "label": configuration.label,
         "vehicle": {
             "name": params.name,
             "length_m": params.length_m,

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mufusion.configurations.registry import Configuration
 from mufusion.estimators import (
     CAMERA_RANGE_M,
     LOCAL_MAX_ERROR,
@@ -50,10 +51,8 @@ from mufusion.estimators import (
     validate_classes,
 )
 from mufusion.estimators.predictive import check_grid
-from mufusion.fusion.assembly import FusionData, assemble_inputs
-from mufusion.fusion.gp import PAPER_PRIOR, FusedEstimate, GPFusion
+from mufusion.fusion import PAPER_PRIOR, FusedEstimate, FusionData, GPFusion, assemble_inputs
 
-CONFIGURATION_NAMES: tuple[str, ...] = ("GT", "L", "P", "F", "F-safe")
 # Clip range of every μ̂ handed to the planner [-] (see the module docstring): 0.05 is half the
 # lowest class value the paper admits (snow/ice starts at 0.1).
 MU_HAT_MIN = 0.05
@@ -100,7 +99,12 @@ class FrictionConfiguration:
     Use :func:`make_configuration` to build one. Subclasses implement :meth:`_mu_hat`.
     """
 
-    name: str = ""
+    configuration: Configuration
+
+    @property
+    def name(self) -> str:
+        """The configuration's short name (``"GT"``, ..., ``"F-safe"``)."""
+        return self.configuration.value
 
     def __init__(
         self,
@@ -177,7 +181,7 @@ class FrictionConfiguration:
 class GroundTruth(FrictionConfiguration):
     """GT: the true friction ahead (paper Sec. IV-B, ``μ̂(s) = μ_gt(s)``)."""
 
-    name = "GT"
+    configuration = Configuration.GT
 
     def _mu_hat(self, s, mu, local):
         return mu.copy(), None, None
@@ -186,7 +190,7 @@ class GroundTruth(FrictionConfiguration):
 class LocalOnly(FrictionConfiguration):
     """L: the held local estimate minus its worst-case error, over the whole horizon."""
 
-    name = "L"
+    configuration = Configuration.L
 
     def _mu_hat(self, s, mu, local):
         # μ̂_l = −max{|e_l|} + (μ_gt(0) + e_l if available else μ̂_0)  (paper Sec. IV-B)
@@ -196,7 +200,7 @@ class LocalOnly(FrictionConfiguration):
 class PredictiveOnly(FrictionConfiguration):
     """P: the lowest μ of the camera's class at each s, held beyond the camera's range."""
 
-    name = "P"
+    configuration = Configuration.P
 
     def _mu_hat(self, s, mu, local):
         # Only the class matters to P, so the reported value's error model is irrelevant here.
@@ -214,14 +218,17 @@ class Fused(FrictionConfiguration):
     def __init__(
         self,
         *,
-        mode: str,
+        configuration: Configuration,
         prior,
         s_local_m: float | None,
         **common,
     ) -> None:
         super().__init__(**common)
+        mode = configuration.fusion_mode
+        if mode is None:
+            raise ValueError(f"configuration {configuration.value!r} is not a fused one")
+        self.configuration = configuration
         self.mode = mode
-        self.name = "F" if mode == "paper" else "F-safe"
         self.prior = prior
         self.s_local_m = s_local_m
         # The fusion's cached kernel blocks are per evaluation grid; rebuilt if the grid changes.
@@ -253,7 +260,7 @@ class Fused(FrictionConfiguration):
 
 
 def make_configuration(
-    name: str,
+    name: str | Configuration,
     *,
     classes: Sequence[SurfaceClass] = PAPER_CLASSES,
     local_error: str = "none",
@@ -270,7 +277,7 @@ def make_configuration(
 
     Parameters
     ----------
-    name : {"GT", "L", "P", "F", "F-safe"}
+    name : Configuration or its name {"GT", "L", "P", "F", "F-safe"}
         Configuration (paper Sec. IV-B; F-safe is F with the fusion's safe mode).
     classes : sequence of SurfaceClass
         Camera class table; default the paper's.
@@ -311,8 +318,7 @@ def make_configuration(
     >>> est.mu_hat.tolist()  # 60 m is beyond the camera's 50 m: 0.4 is held
     [0.6, 0.6, 0.4, 0.4, 0.4, 0.4, 0.4]
     """
-    if name not in CONFIGURATION_NAMES:
-        raise ValueError(f"name must be one of {list(CONFIGURATION_NAMES)}, got {name!r}")
+    configuration = Configuration.parse(name)
     table = validate_classes(classes)
     check_error_model("local_error", local_error, rng)
     check_error_model("predictive_error", predictive_error, rng)
@@ -330,17 +336,14 @@ def make_configuration(
     common = dict(
         local=local, classes=table, predictive_error=predictive_error, rng=rng, range_m=range_m
     )
-    if name == "GT":
-        return GroundTruth(**common)
-    if name == "L":
-        return LocalOnly(**common)
-    if name == "P":
-        return PredictiveOnly(**common)
+    simple = {c.configuration: c for c in (GroundTruth, LocalOnly, PredictiveOnly)}
+    if configuration in simple:
+        return simple[configuration](**common)
     prior = PAPER_PRIOR
     if length_scale_m is not None:
         if not (math.isfinite(length_scale_m) and length_scale_m > 0.0):
             raise ValueError(f"length_scale_m must be finite and > 0 m, got {length_scale_m!r}")
         prior = dataclasses.replace(PAPER_PRIOR, length_scale_m=float(length_scale_m))
     return Fused(
-        mode="paper" if name == "F" else "safe", prior=prior, s_local_m=s_local_m, **common
+        configuration=configuration, prior=prior, s_local_m=s_local_m, **common
     )

@@ -7,13 +7,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mufusion.fusion import LOCAL_GROUP
-from mufusion.fusion.configurations import (
+from mufusion.configurations import (
     CONFIGURATION_NAMES,
     MU_HAT_MIN,
     FrictionEstimate,
     make_configuration,
 )
+from mufusion.fusion import LOCAL_GROUP
 
 GRID_M = np.arange(0.0, 51.0, 1.0)
 TURN_MU = np.where(GRID_M < 20.0, 0.8, 0.4)  # μ 0.8 under the vehicle, 0.4 from 20 m ahead
@@ -213,7 +213,7 @@ def test_mu_hat_is_finite_positive_on_the_grid(name, mu_near, mu_far, change_m, 
 @pytest.mark.parametrize(
     ("name", "kwargs", "match"),
     [
-        ("X", {}, r"name must be one of \['GT', 'L', 'P', 'F', 'F-safe'\]"),
+        ("X", {}, r"configuration must be one of \['GT', 'L', 'P', 'F', 'F-safe'\]"),
         ("F", {"local_error": "random"}, "local_error='random' needs"),
         ("P", {"predictive_error": "random"}, "predictive_error='random' needs"),
         ("F", {"predictive_error": "bad"}, "predictive_error must be one of"),

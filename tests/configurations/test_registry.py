@@ -1,0 +1,35 @@
+"""The configuration registry: one definition of each name, its label and fusion mode."""
+
+from __future__ import annotations
+
+import pytest
+
+from mufusion.configurations import (
+    CONFIGURATION_NAMES,
+    PAPER_CONFIGURATIONS,
+    Configuration,
+    make_configuration,
+)
+
+
+def test_names_are_the_papers_plus_safe_mode_in_order() -> None:
+    assert CONFIGURATION_NAMES == ("GT", "L", "P", "F", "F-safe")
+    assert [c.value for c in PAPER_CONFIGURATIONS] == ["GT", "L", "P", "F"]
+
+
+@pytest.mark.parametrize(
+    ("name", "mode"), [("GT", None), ("L", None), ("P", None), ("F", "paper"), ("F-safe", "safe")]
+)
+def test_fusion_mode_and_built_source_agree(name: str, mode: str | None) -> None:
+    configuration = Configuration.parse(name)
+    assert configuration.fusion_mode == mode
+    source = make_configuration(configuration)
+    assert source.name == name
+    assert source.configuration is configuration
+    assert getattr(source, "mode", None) == mode
+    assert configuration.label.startswith(f"{name} (")
+
+
+def test_unknown_name_lists_the_allowed_ones() -> None:
+    with pytest.raises(ValueError, match=r"configuration must be one of \['GT'"):
+        Configuration.parse("F_safe")
