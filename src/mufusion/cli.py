@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NoReturn
 
 import typer
 from rich.console import Console
@@ -41,9 +42,20 @@ def _main(
     )
 
 
-def _fail(message: str) -> None:
+def _fail(message: str) -> NoReturn:
     console.print(f"[red]error:[/red] {message}")
     raise typer.Exit(code=2)
+
+
+def _check_out_dir(out: Path, option: str = "--out") -> None:
+    """Fail (exit 2) before any work if ``out`` cannot be a writable output directory."""
+    existing = next((p for p in (out, *out.parents) if p.exists()), None)
+    if out.exists() and not out.is_dir():
+        _fail(f"{option} {str(out)!r} is a file, not a directory")
+    if existing is not None and not existing.is_dir():
+        _fail(f"{option} {str(out)!r}: {str(existing)!r} is a file, not a directory")
+    if existing is not None and not os.access(existing, os.W_OK | os.X_OK):
+        _fail(f"{option} {str(out)!r} is not writable ({str(existing)!r} denies writing)")
 
 
 @app.command()
@@ -85,6 +97,7 @@ def run(
         cfg = load_scenario(scenario, list(set_ or []))
     except ValueError as err:
         _fail(str(err))
+    _check_out_dir(out)
     with _progress() as progress:
         task = progress.add_task(f"{cfg.name} / {config}", total=cfg.duration_s)
         log = run_scenario(cfg, config, progress=lambda t: progress.update(task, completed=t))
@@ -110,17 +123,17 @@ def reproduce(
     gif: Annotated[bool, typer.Option(help="Write animated GIFs of the key runs.")] = True,
 ) -> None:
     """Reproduce the paper: every configuration in both scenarios, figures and a report."""
-    from mufusion.plots.explain import explain_differences
-    from mufusion.plots.report import write_report
     from mufusion.plots.run_figures import reproduction_figures
-    from mufusion.scenarios.campaign import reproduction_specs
+    from mufusion.reproduction import explain_differences, reproduction_specs, write_report
 
     if jobs is not None and jobs < 1:
         _fail(f"--jobs must be >= 1, got {jobs}")
+    _check_out_dir(out)
     specs = reproduction_specs(include_car=car)
     started = time.perf_counter()
     results, runs = _run_specs(specs, out, jobs)
-    figures = reproduction_figures(results, out / "figures", gif=gif)
+    run_dirs = {(spec.variant, spec.config): directory for spec, _m, directory in results}
+    figures = reproduction_figures(run_dirs, out / "figures", gif=gif)
     elapsed = time.perf_counter() - started
     summary = {"runs": runs, "elapsed_s": round(elapsed, 1)}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
@@ -241,40 +254,16 @@ def _progress() -> Progress:
     )
 
 
-# (summary key, short header, unit/format): short headers keep the table readable at 80 columns;
-# summary.json has the full names.
-_TABLE_COLUMNS = (
-    ("scenario", "scenario", ""),
-    ("variant", "variant", ""),
-    ("config", "cfg", ""),
-    ("collision", "crash", ""),
-    ("impact_speed_mps", "impact m/s", ""),
-    ("min_clearance_m", "clear m", ""),
-    ("left_lane", "left lane", ""),
-    ("entered_opposing_lane", "opp. lane", ""),
-    ("utilization_vs_gt", "util vs GT %", "%"),
-    ("max_force_excess", "F excess %", "%"),
-)
-
-
 def _print_table(rows: list[dict]) -> None:
+    from mufusion.metrics import TABLE_COLUMNS, format_cell
+
     table = Table(title="outcome (full names and all metrics in summary.json)")
-    cols = [c for c in _TABLE_COLUMNS if any(c[0] in r for r in rows)]
-    for _, header, _ in cols:
-        table.add_column(header, overflow="fold")
+    cols = [c for c in TABLE_COLUMNS if any(c.key in r for r in rows)]
+    for col in cols:
+        table.add_column(col.header, overflow="fold")
     for r in rows:
-        table.add_row(*[_fmt(r.get(key), unit) for key, _, unit in cols])
+        table.add_row(*[format_cell(r.get(col.key), col) for col in cols])
     Console().print(table)
-
-
-def _fmt(v: object, unit: str = "") -> str:
-    if v is None:
-        return "–"
-    if unit == "%" and isinstance(v, int | float) and not isinstance(v, bool):
-        return f"{100 * v:+.1f}"
-    if isinstance(v, float):
-        return f"{v:.3g}"
-    return str(v)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -5,39 +5,21 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from factories import plan_stages, planning_step, run_meta, ticks
 from mufusion.metrics import attach_gt_comparison, compute_metrics
 from mufusion.sim.log import RunLog, load_run
 
 
 def _log(n: int = 50, **overrides) -> RunLog:
     t = np.arange(n) * 0.02
-    cols = {
-        "t_s": t,
-        "speed_mps": np.linspace(20.0, 15.0, n),
-        "s_m": 20.0 * t,
-        "d_m": np.zeros(n),
-        "in_collision": np.zeros(n, bool),
-        "passed_obstacle": np.zeros(n, bool),
-        "clearance_m": np.full(n, np.nan),
-        "left_lane": np.zeros(n, bool),
-        "in_opposing_lane": np.zeros(n, bool),
-    }
-    cols.update(overrides)
-    log = RunLog(meta={"comparison_time_s": 0.5})
-    log.append_block("timeseries", cols)
+    cols = {"speed_mps": np.linspace(20.0, 15.0, n), "s_m": 20.0 * t, **overrides}
+    log = RunLog(run_meta(comparison_time_s=0.5))
+    log.extend(ticks(n, **cols))
     return log
 
 
 def _plan(log: RunLog, step: int, t: float, fyf: float, fzf: float = 50e3, mu_true: float = 1.0):
-    k = np.arange(4)
-    log.append_block(
-        "plans",
-        {
-            "step": step, "t_s": t, "k": k, "fyf_n": np.full(4, fyf), "fxf_n": np.zeros(4),
-            "fxr_n": np.zeros(4), "fyr_n": np.zeros(4), "fzf_n": np.full(4, fzf),
-            "fzr_n": np.full(4, 30e3), "mu_true": np.full(4, mu_true),
-        },
-    )
+    log.append(plan_stages(step, t, fyf_n=fyf, fzf_n=fzf, fzr_n=30e3, mu_true=mu_true))
 
 
 def test_quiet_run_has_no_events() -> None:
@@ -91,16 +73,15 @@ def test_utilization_vs_gt_and_force_excess() -> None:
 
 def test_empty_log_is_an_error() -> None:
     with pytest.raises(ValueError, match="timeseries"):
-        compute_metrics(RunLog())
+        compute_metrics(RunLog(run_meta()))
 
 
 def test_log_round_trip(tmp_path) -> None:
     log = _log()
     _plan(log, 0, 0.0, fyf=1e3)
-    log.append("planning_steps", {"step": 0, "t_s": 0.0, "fallback": False, "sampled_reinit": True})
-    log.meta["scenario"] = {"name": "popup"}
+    log.append(planning_step(step=0, t_s=0.0, sampled_reinit=True))
     back = load_run(log.save(tmp_path / "run"))
-    assert back.meta["scenario"]["name"] == "popup"
+    assert back.meta == log.meta
     np.testing.assert_allclose(back.timeseries["speed_mps"], log.timeseries["speed_mps"])
     assert len(back.plans) == 4
     assert compute_metrics(back).to_dict() == compute_metrics(log).to_dict()

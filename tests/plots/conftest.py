@@ -13,8 +13,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mufusion.configurations import Configuration
 from mufusion.plots._common import footprint_xy
 from mufusion.sim.log import RunLog, load_run
+from mufusion.sim.records import (
+    EstimateGrid,
+    LoopRatesMeta,
+    ObstacleTrace,
+    PlannerSettings,
+    PlanningStep,
+    PlanStages,
+    RoadTrace,
+    RunMeta,
+    StepTiming,
+    Tick,
+    VehicleGeometry,
+)
 
 LANE_WIDTH_M = 3.5
 START_S_M = 20.0
@@ -34,8 +48,7 @@ def _road(name: str) -> dict:
     psi = np.concatenate([[0.0], np.cumsum(curvature[:-1] * np.diff(s))])
     x = np.concatenate([[0.0], np.cumsum(np.cos(psi[:-1]) * np.diff(s))])
     y = np.concatenate([[0.0], np.cumsum(np.sin(psi[:-1]) * np.diff(s))])
-    return {"s_m": s, "x_m": x, "y_m": y, "psi_rad": psi, "curvature_1pm": curvature,
-            "lane_width_m": LANE_WIDTH_M}
+    return {"s_m": s, "x_m": x, "y_m": y, "psi_rad": psi, "curvature_1pm": curvature}
 
 
 def _friction(name: str, road: dict) -> dict:
@@ -62,9 +75,10 @@ def _lateral(name: str, config: str, s_rel: np.ndarray) -> np.ndarray:
     return 2.6 * np.exp(-(((s_rel - 30.0) / 12.0) ** 2))
 
 
-def make_log(name: str = "turn", config: str = "F", duration_s: float = 4.0,
-             collision_at_s: float | None = None) -> RunLog:
-    """A synthetic run log of scenario ``name`` ("turn" | "popup") and configuration ``config``."""
+def make_meta(name: str = "turn", config: str = "F", width_m: float = WIDTH_M,
+              lane_width_m: float = LANE_WIDTH_M, comparison_time_s: float | None = None,
+              vehicle: str = "car", duration_s: float = 4.0) -> RunMeta:
+    """Metadata of a synthetic run on road ``name`` ("turn" | "popup")."""
     road = _road(name)
     friction = _friction(name, road)
     obstacles = []
@@ -72,56 +86,74 @@ def make_log(name: str = "turn", config: str = "F", duration_s: float = 4.0,
         o_s, o_d, o_len, o_wid = START_S_M + 30.0, 0.0, 4.0, 2.0
         ox, oy, opsi = _cartesian(road, np.array([o_s]), np.array([o_d]))
         corners = footprint_xy(ox[0], oy[0], opsi[0], o_len, o_wid)
-        obstacles.append({"s_m": o_s, "d_m": o_d, "length_m": o_len, "width_m": o_wid,
-                          "appear_time_s": 0.5, "corners_x_m": corners[:, 0].tolist(),
-                          "corners_y_m": corners[:, 1].tolist()})
-    meta = {
-        "scenario": {"name": name, "initial_speed_mps": 20.0},
-        "configuration": config,
-        "label": f"{config} (synthetic)",
-        "vehicle": {"name": "car", "length_m": LENGTH_M, "width_m": WIDTH_M,
-                    "wheelbase_m": 2.6, "cog_to_front_axle_m": 1.2, "cog_to_rear_axle_m": 1.4},
-        "road": road,
-        "friction": friction,
-        "obstacles": obstacles,
-        "comparison_time_s": 0.0 if name == "turn" else 0.5,
-        "utilization_factor": LAMBDA,
-        "polygon_sides": 12,
-        "rates": {"plant_hz": 200, "controller_hz": 50, "planner_hz": 10},
-        "start_s_m": START_S_M,
-    }
-    log = RunLog(meta=meta)
+        obstacles.append(ObstacleTrace(
+            s_m=o_s, d_m=o_d, length_m=o_len, width_m=o_wid, appear_time_s=0.5,
+            corners_x_m=corners[:, 0].tolist(), corners_y_m=corners[:, 1].tolist()))
+    return RunMeta(
+        scenario_name=name,
+        configuration=Configuration.parse(config),
+        seed=0,
+        scenario_config={"name": name, "initial_speed_mps": 20.0},
+        vehicle=VehicleGeometry(name=vehicle, length_m=LENGTH_M, width_m=width_m,
+                                wheelbase_m=2.6, cog_to_front_axle_m=1.2, cog_to_rear_axle_m=1.4),
+        road=RoadTrace(s_m=road["s_m"].tolist(), x_m=road["x_m"].tolist(),
+                       y_m=road["y_m"].tolist(), psi_rad=road["psi_rad"].tolist(),
+                       curvature_1pm=road["curvature_1pm"].tolist(),
+                       mu=friction["mu"].tolist(), lane_width_m=lane_width_m),
+        obstacles=obstacles,
+        planner=PlannerSettings(horizon_steps=STAGES, dt_s=STAGE_DT_S, utilization_factor=LAMBDA,
+                                polygon_sides=12, obstacle_margin_m=0.5, lane_d_min_m=-0.75,
+                                lane_d_max_m=0.75, backend="acados", use_sampling=True),
+        rates=LoopRatesMeta(plant_hz=200.0, controller_hz=50.0, planner_hz=10.0),
+        start_s_m=START_S_M,
+        start_heading_rad=0.0,
+        comparison_time_s=(0.0 if name == "turn" else 0.5) if comparison_time_s is None
+        else comparison_time_s,
+        duration_s=duration_s,
+    )
+
+
+def make_log(name: str = "turn", config: str = "F", duration_s: float = 4.0,
+             collision_at_s: float | None = None) -> RunLog:
+    """A synthetic run log of scenario ``name`` ("turn" | "popup") and configuration ``config``."""
+    road = _road(name)
+    friction = _friction(name, road)
+    meta = make_meta(name, config, duration_s=duration_s)
+    obstacles = meta.obstacles
+    log = RunLog(meta)
 
     t = np.arange(0.0, duration_s + 1e-9, 0.02)
     speed = 20.0 - 2.0 * t
     s = START_S_M + 20.0 * t - t**2
     d = _lateral(name, config, s - START_S_M)
     x, y, psi = _cartesian(road, s, d)
-    n = len(t)
     w = LANE_WIDTH_M
-    collided = np.zeros(n, bool)
+    collided = np.zeros(t.size, bool)
     if collision_at_s is not None:
         collided = s - START_S_M >= collision_at_s
-    clearance = np.full(n, np.nan)
+    clearance = np.full(t.size, np.nan)
     if obstacles:
-        clearance = np.where(t >= 0.5, np.abs(s - obstacles[0]["s_m"]), np.nan)
-    mu_true = friction_at_s = np.interp(s, friction["s_m"], friction["mu"])
-    log.append_block("timeseries", {
-        "t_s": t, "x_m": x, "y_m": y, "psi_rad": psi, "vx_mps": speed, "vy_mps": 0.0,
-        "psidot_radps": 0.0, "speed_mps": speed, "s_m": s, "d_m": d, "dpsi_rad": 0.0,
-        "steer_rad": 0.0, "torque_front_nm": 0.0, "torque_rear_nm": 0.0, "util_front": 0.3,
-        "util_rear": 0.2, "mu_front": mu_true, "mu_rear": friction_at_s,
-        "local_available": False, "obstacle_active": t >= 0.5 if obstacles else False,
-        "clearance_m": clearance, "in_collision": collided,
-        "passed_obstacle": (s > obstacles[0]["s_m"]) if obstacles else False,
-        "left_lane": np.abs(d) > w / 2 - WIDTH_M / 2, "in_opposing_lane": d > w / 2,
-    })
+        clearance = np.where(t >= 0.5, np.abs(s - obstacles[0].s_m), np.nan)
+    mu_true = np.interp(s, friction["s_m"], friction["mu"])
+    for i in range(t.size):
+        log.append(Tick(
+            t_s=t[i], x_m=x[i], y_m=y[i], psi_rad=psi[i], vx_mps=speed[i], vy_mps=0.0,
+            psidot_radps=0.0, speed_mps=speed[i], s_m=s[i], d_m=d[i], dpsi_rad=0.0,
+            body_slip_rad=0.0, steer_rad=0.0, steer_cmd_rad=0.0, torque_front_nm=0.0,
+            torque_rear_nm=0.0, util_front=0.3, util_rear=0.2, mu_front=mu_true[i],
+            mu_rear=mu_true[i], local_available=False, control_mode="plan",
+            obstacle_active=bool(obstacles) and t[i] >= 0.5, clearance_m=clearance[i],
+            in_collision=bool(collided[i]),
+            passed_obstacle=bool(obstacles) and s[i] > obstacles[0].s_m,
+            left_lane=bool(abs(d[i]) > w / 2 - WIDTH_M / 2), in_opposing_lane=bool(d[i] > w / 2),
+        ))
 
     mu_hat_level = {"GT": None, "L": 0.8, "P": 0.55, "F": 0.7, "F-safe": 0.6}.get(config, 0.7)
     k = np.arange(STAGES)
+    grid = np.arange(0.0, 51.0)
+    fused = config in ("F", "F-safe")
     for step, t0 in enumerate(np.arange(0.0, duration_s + 1e-9, 0.1)):
         i0 = int(np.argmin(np.abs(t - t0)))
-        t_k = t0 + k * STAGE_DT_S
         s_k = s[i0] + speed[i0] * k * STAGE_DT_S
         d_k = _lateral(name, config, s_k - START_S_M)
         x_k, y_k, _ = _cartesian(road, s_k, d_k)
@@ -130,34 +162,31 @@ def make_log(name: str = "turn", config: str = "F", duration_s: float = 4.0,
         fzf = np.full(STAGES, 8000.0)
         limit = LAMBDA * mu_hat_k * fzf
         angle = np.linspace(0.0, -2.0, STAGES)
-        fyf, fxf = 0.8 * limit * np.cos(angle), 0.8 * limit * np.sin(angle)
-        log.append_block("plans", {
-            "step": step, "t_s": t0, "k": k, "t_k_s": t_k, "s_m": s_k, "d_m": d_k,
-            "dpsi_rad": 0.0, "psidot_radps": 0.0, "vx_mps": speed[i0], "vy_mps": 0.0,
-            "x_m": x_k, "y_m": y_k, "fyf_n": fyf, "fxf_n": fxf, "fxr_n": 0.0, "fyr_n": 0.0,
-            "fzf_n": fzf, "fzr_n": 7000.0, "limit_front_n": limit, "limit_rear_n": limit,
-            "mu_hat": mu_hat_k, "mu_true": mu_true_k,
-        })
-        log.append("planning_steps", {
-            "step": step, "t_s": t0, "s_m": s[i0], "mode": "cruise", "status": 0, "ok": True,
-            "fallback": False, "sampled_reinit": False, "local_available": False,
-            "local_mu": np.nan,
-        })
-        log.append("timing", {"step": step, "t_s": t0, "solve_ms": 5.0, "step_ms": 6.0})
-        grid = np.arange(0.0, 51.0)
+        full = np.full(STAGES, 0.0)
+        log.append(PlanStages(
+            step=step, t_s=t0, k=k, t_k_s=t0 + k * STAGE_DT_S, s_m=s_k, d_m=d_k, dpsi_rad=full,
+            psidot_radps=full, vx_mps=np.full(STAGES, speed[i0]), vy_mps=full, x_m=x_k, y_m=y_k,
+            fyf_n=0.8 * limit * np.cos(angle), fxf_n=0.8 * limit * np.sin(angle), fxr_n=full,
+            fyr_n=full, fzf_n=fzf, fzr_n=np.full(STAGES, 7000.0), limit_front_n=limit,
+            limit_rear_n=limit, mu_hat=mu_hat_k, mu_true=mu_true_k,
+        ))
+        log.append(PlanningStep(
+            step=step, t_s=t0, s_m=s[i0], mode="cruise", status=0, ok=True, fallback=False,
+            sampled_reinit=False, local_available=False, local_mu=np.nan,
+        ))
+        log.append(StepTiming(step=step, t_s=t0, solve_ms=5.0, step_ms=6.0))
         mu_grid = np.interp(s[i0] + grid, friction["s_m"], friction["mu"])
-        fused = config in ("F", "F-safe")
         mean = np.clip(mu_grid - 0.05, 0.1, None)
         std = 0.05 + 0.003 * grid
         data_mu = np.where(grid % 10 == 0, mu_grid - 0.1, np.nan)
-        log.append_block("estimates", {
-            "step": step, "t_s": t0, "s_ahead_m": grid, "s_m": s[i0] + grid,
-            "mu_true": mu_grid,
-            "mu_hat": mean - 1.96 * std if fused else np.minimum(mu_grid, mu_hat_level or 9),
-            "mean": mean if fused else np.nan, "std": std if fused else np.nan,
-            "lower": mean - 1.96 * std if fused else np.nan,
-            "data_mu": data_mu, "data_margin": np.where(np.isfinite(data_mu), 0.15, np.nan),
-        })
+        nan = np.full(grid.size, np.nan)
+        log.append(EstimateGrid(
+            step=step, t_s=t0, s_ahead_m=grid, s_m=s[i0] + grid, mu_true=mu_grid,
+            mu_hat=mean - 1.96 * std if fused else np.minimum(mu_grid, mu_hat_level or 9),
+            mean=mean if fused else nan, std=std if fused else nan,
+            lower=mean - 1.96 * std if fused else nan, data_mu=data_mu,
+            data_margin=np.where(np.isfinite(data_mu), 0.15, np.nan),
+        ))
     return log
 
 

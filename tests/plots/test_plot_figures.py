@@ -44,7 +44,7 @@ def test_every_static_figure_writes_a_png(saved_log, tmp_path: Path) -> None:
 def test_snapshot_uses_the_row_nearest_the_requested_position(saved_log) -> None:
     log = saved_log("turn", "L")
     ts = log.timeseries
-    travelled = ts["s_m"].to_numpy() - log.meta["start_s_m"]
+    travelled = ts["s_m"].to_numpy() - log.meta.start_s_m
     for position in (0.0, 15.0, 30.0, 47.3):
         i = row_at_position(log, position)
         assert abs(travelled[i] - position) == pytest.approx(np.min(np.abs(travelled - position)))
@@ -85,7 +85,7 @@ def test_lateral_and_speed_has_one_line_per_configuration(saved_log) -> None:
         assert [line.get_label() for line in runs] == ["GT", "L", "P", "F"]
     legend = [t.get_text() for t in ax_d.get_legend().get_texts()]
     assert legend[:4] == ["GT", "L", "P", "F"]
-    w = logs[0].meta["road"]["lane_width_m"]
+    w = logs[0].meta.road.lane_width_m
     levels = {float(line.get_ydata()[0]) for line in ax_d.lines if line.get_gid() != "run"}
     assert {-w / 2, w / 2, 3 * w / 2} <= levels
     assert "[m]" in ax_d.get_ylabel() and "[m/s]" in ax_v.get_ylabel()
@@ -94,12 +94,12 @@ def test_lateral_and_speed_has_one_line_per_configuration(saved_log) -> None:
 def test_lateral_panel_marks_the_obstacle_in_s_d(saved_log) -> None:
     log = saved_log("popup", "F")
     ax_d, _ = build_traces_figure([log]).axes
-    obstacle = log.meta["obstacles"][0]
+    obstacle = log.meta.obstacles[0]
     (box,) = [p for p in ax_d.patches if p.get_label().startswith("obstacle")]
     assert box.get_x() + box.get_width() / 2 == pytest.approx(
-        obstacle["s_m"] - log.meta["start_s_m"]
+        obstacle.s_m - log.meta.start_s_m
     )
-    assert box.get_height() == pytest.approx(obstacle["width_m"])
+    assert box.get_height() == pytest.approx(obstacle.width_m)
 
 
 @settings(max_examples=30, deadline=None)
@@ -123,7 +123,7 @@ def test_force_figure_draws_each_configurations_plan_and_limits(saved_log) -> No
         assert np.allclose(pts.get_xdata(), plan["fyf_n"] / 1e3)
         radius = plan["limit_front_n"].min() / 1e3
         assert np.allclose(np.hypot(poly.get_xdata(), poly.get_ydata()), radius)
-        assert len(poly.get_xdata()) == log.meta["polygon_sides"] + 1
+        assert len(poly.get_xdata()) == log.meta.planner.polygon_sides + 1
     assert "[kN]" in ax.get_xlabel() and "[kN]" in ax.get_ylabel()
 
 

@@ -14,7 +14,7 @@ SWEEP = """
 name = "test sweep"
 scenarios = ["popup", "turn"]
 configs = ["GT", "P"]
-overrides = ["duration_s=0.5"]
+overrides = ["duration_s=0.6"]
 [grid]
 "initial_speed_mps" = [10.0, 12.0, 14.0]
 """
@@ -30,7 +30,7 @@ def test_grid_times_scenarios_times_configs(tmp_path):
     specs = campaign_specs(load_campaign(_write(tmp_path, SWEEP)))
     assert len(specs) == 2 * 3 * 2
     assert {s.variant for s in specs} == {f"initial_speed_mps={v}" for v in (10.0, 12.0, 14.0)}
-    assert all("duration_s=0.5" in s.overrides for s in specs)
+    assert all("duration_s=0.6" in s.overrides for s in specs)
 
 
 @pytest.mark.parametrize("shards", [1, 2, 4, 7])

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pytest
 
+from factories import run_meta
+from mufusion.configurations import FrictionEstimate
 from mufusion.metrics import compute_metrics
+from mufusion.planner import Plan
 from mufusion.road import FrictionMap, Obstacle, straight_road
 from mufusion.sim.log import load_run
 from mufusion.sim.loop import ClosedLoop, LoopRates
@@ -18,23 +19,6 @@ from mufusion.vehicle.planner_model import State
 from mufusion.vehicle.plant import Plant, initial_state
 
 N = 8
-
-
-@dataclass(frozen=True)
-class _Plan:
-    states: np.ndarray
-    inputs: np.ndarray
-    rear_lateral_force_n: np.ndarray
-    normal_load_front_n: np.ndarray
-    normal_load_rear_n: np.ndarray
-    force_limit_front_n: np.ndarray
-    force_limit_rear_n: np.ndarray
-    mu_hat: np.ndarray
-    status: int = 0
-    ok: bool = True
-    fallback: bool = False
-    sampled_reinit: bool = False
-    solve_time_s: float = 1e-4
 
 
 class _Planner:
@@ -50,7 +34,10 @@ class _Planner:
         mu = kw["mu_hat_of_s"](states[:-1, State.s])
         fz = np.full(N, 50e3)
         limit = 0.9 * mu * fz
-        return _Plan(states, np.zeros((N, 3)), np.zeros(N), fz, fz, limit, limit, mu)
+        return Plan(t0_s=t_s, states=states, inputs=np.zeros((N, 3)),
+                    rear_lateral_force_n=np.zeros(N), mu_hat=mu, normal_load_front_n=fz,
+                    normal_load_rear_n=fz, force_limit_front_n=limit, force_limit_rear_n=limit,
+                    status=0, ok=True, fallback=False, solve_time_s=1e-4)
 
 
 class _Controller:
@@ -63,20 +50,14 @@ class _Controller:
         return ActuatorCommand(self.steer_rad, 0.0, 0.0)
 
 
-@dataclass
-class _Estimate:
-    mu_hat: np.ndarray
-    local_available: bool = False
-    local_mu: float | None = None
-
-
 class _Friction:
     def __init__(self) -> None:
         self.utilizations: list[float] = []
 
     def step(self, s_ahead_m, mu_true_ahead, utilization):
         self.utilizations.append(utilization)
-        return _Estimate(mu_hat=np.asarray(mu_true_ahead) - 0.1)
+        return FrictionEstimate(s_m=np.asarray(s_ahead_m), mu_hat=np.asarray(mu_true_ahead) - 0.1,
+                                local_available=False, local_mu=None)
 
 
 RATES = LoopRates(200.0, 50.0, 10.0)
@@ -90,7 +71,7 @@ def _loop(obstacles=(), steer_rad=0.0, rates=RATES):
     loop = ClosedLoop(
         world=world, params=TRUCK, plant=plant, planner=planner, controller=controller,
         friction=friction, rates=rates, reference_speed_mps=15.0, lane_bounds_m=(-0.45, 0.45),
-        meta={"comparison_time_s": 0.0},
+        meta=run_meta(),
     )
     return loop, planner, controller, friction
 

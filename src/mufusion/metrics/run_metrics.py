@@ -119,7 +119,7 @@ def compute_metrics(log: RunLog) -> RunMetrics:
 
     timing = log.timing
     steps = log.planning_steps
-    t_c = float(log.meta.get("comparison_time_s", 0.0))
+    t_c = log.meta.comparison_time_s
     return RunMetrics(
         collision=collision,
         impact_speed_mps=impact,

@@ -18,15 +18,17 @@ from matplotlib.colors import LinearSegmentedColormap, Normalize
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
+from mufusion.configurations import Configuration
 from mufusion.sim.log import RunLog
+from mufusion.sim.records import RunMeta
 
 # One colour per configuration, the same in every figure.
-CONFIG_COLORS: dict[str, str] = {
-    "GT": "black",
-    "L": "tab:orange",
-    "P": "tab:green",
-    "F": "tab:blue",
-    "F-safe": "tab:purple",
+CONFIG_COLORS: dict[Configuration, str] = {
+    Configuration.GT: "black",
+    Configuration.L: "tab:orange",
+    Configuration.P: "tab:green",
+    Configuration.F: "tab:blue",
+    Configuration.F_SAFE: "tab:purple",
 }
 # Colour scale of the road surface: low μ (ice, snow) pale, dry asphalt (μ ≈ 1) grey; kept apart
 # from the configuration colours so vehicles and plans stay visible on any surface.
@@ -50,18 +52,18 @@ def require_logs(logs: Sequence[RunLog]) -> list[RunLog]:
 
 
 def config_name(log: RunLog) -> str:
-    """The configuration label of a run ("GT", "L", "P", "F", "F-safe", or the label)."""
-    return str(log.meta.get("configuration") or log.meta.get("label") or "run")
+    """The configuration's short name of a run ("GT", "L", "P", "F", "F-safe")."""
+    return log.meta.configuration.value
 
 
 def config_color(log: RunLog, index: int) -> str:
-    """Colour of a run's configuration; runs of unknown configuration cycle through C0..C9."""
-    return CONFIG_COLORS.get(config_name(log), f"C{index % 10}")
+    """Colour of a run's configuration (``index`` is unused but kept for callers' symmetry)."""
+    return CONFIG_COLORS.get(log.meta.configuration, f"C{index % 10}")
 
 
 def start_s(log: RunLog) -> float:
     """The paper's "s = 0": the vehicle's initial progress [m]."""
-    return float(log.meta.get("start_s_m", log.timeseries["s_m"].iloc[0]))
+    return log.meta.start_s_m
 
 
 def check_time(log: RunLog, time_s: float, name: str = "time_s") -> None:
@@ -124,34 +126,31 @@ def footprint_xy(
     return half @ rot.T + [x_m, y_m]
 
 
-def _road_arrays(meta: dict) -> tuple[np.ndarray, ...]:
-    road = meta["road"]
-    return tuple(
-        np.asarray(road[key], dtype=float) for key in ("s_m", "x_m", "y_m", "psi_rad")
-    )
+def _road_arrays(meta: RunMeta) -> tuple[np.ndarray, ...]:
+    road = meta.road
+    return tuple(np.asarray(a, dtype=float) for a in (road.s_m, road.x_m, road.y_m, road.psi_rad))
 
 
-def lane_width(meta: dict) -> float:
-    """Lane width [m] from the log's meta (road.lane_width_m or top-level lane_width_m)."""
-    return float(meta.get("road", {}).get("lane_width_m", meta.get("lane_width_m", 3.5)))
+def lane_width(meta: RunMeta) -> float:
+    """Lane width [m] of the run's road."""
+    return meta.road.lane_width_m
 
 
-def friction_at(meta: dict, s_m: np.ndarray) -> np.ndarray:
+def friction_at(meta: RunMeta, s_m: np.ndarray) -> np.ndarray:
     """True μ at progress ``s_m``: piecewise constant, each sample holding until the next."""
-    fr = meta["friction"]
-    s_ref = np.asarray(fr["s_m"], dtype=float)
-    mu = np.asarray(fr["mu"], dtype=float)
+    s_ref = np.asarray(meta.road.s_m, dtype=float)
+    mu = np.asarray(meta.road.mu, dtype=float)
     idx = np.clip(np.searchsorted(s_ref, s_m, side="right") - 1, 0, len(mu) - 1)
     return mu[idx]
 
 
-def _offset(meta: dict, d_m: float, keep: np.ndarray) -> np.ndarray:
+def _offset(meta: RunMeta, d_m: float, keep: np.ndarray) -> np.ndarray:
     _s, x, y, psi = _road_arrays(meta)
     # Left normal of the centreline: d is positive to the left (log schema).
     return np.column_stack([x[keep] - d_m * np.sin(psi[keep]), y[keep] + d_m * np.cos(psi[keep])])
 
 
-def draw_road(ax: Axes, meta: dict, centre_xy: tuple[float, float], radius_m: float):
+def draw_road(ax: Axes, meta: RunMeta, centre_xy: tuple[float, float], radius_m: float):
     """Draw both lanes near ``centre_xy``: surface coloured by true μ, edges and centre marking.
 
     Returns the surface collection (the mappable for a μ colorbar).
@@ -182,13 +181,13 @@ def draw_road(ax: Axes, meta: dict, centre_xy: tuple[float, float], radius_m: fl
     return surface
 
 
-def draw_obstacles(ax: Axes, meta: dict, time_s: float) -> int:
+def draw_obstacles(ax: Axes, meta: RunMeta, time_s: float) -> int:
     """Draw the obstacles active at ``time_s``; returns how many were drawn."""
     drawn = 0
-    for obstacle in meta.get("obstacles") or []:
-        if time_s + 1e-9 < float(obstacle.get("appear_time_s", 0.0)):
+    for obstacle in meta.obstacles:
+        if time_s + 1e-9 < obstacle.appear_time_s:
             continue
-        corners = np.column_stack([obstacle["corners_x_m"], obstacle["corners_y_m"]])
+        corners = np.column_stack([obstacle.corners_x_m, obstacle.corners_y_m])
         ax.add_patch(
             Polygon(corners, closed=True, facecolor="tab:red", edgecolor="darkred", lw=1.0,
                     zorder=3, gid="obstacle")
@@ -197,12 +196,11 @@ def draw_obstacles(ax: Axes, meta: dict, time_s: float) -> int:
     return drawn
 
 
-def draw_vehicle(ax: Axes, meta: dict, row: pd.Series, color: str) -> Polygon:
+def draw_vehicle(ax: Axes, meta: RunMeta, row: pd.Series, color: str) -> Polygon:
     """Draw the vehicle footprint of one time-series row."""
-    vehicle = meta.get("vehicle", {})
     corners = footprint_xy(
         float(row["x_m"]), float(row["y_m"]), float(row["psi_rad"]),
-        float(vehicle.get("length_m", 4.5)), float(vehicle.get("width_m", 1.8)),
+        meta.vehicle.length_m, meta.vehicle.width_m,
     )
     patch = Polygon(corners, closed=True, facecolor=color, edgecolor="black", lw=1.0,
                     alpha=0.9, zorder=5, gid="footprint")

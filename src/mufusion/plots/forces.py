@@ -61,7 +61,7 @@ def build_forces_figure(logs: Sequence[RunLog], time_s: float) -> Figure:
         # The tightest stage's polygon: the limit that binds the plan (λ μ̂ F_zf, paper (10)),
         # against the tightest physical limit over the same stages.
         tight = plan.iloc[int(np.argmin(plan["limit_front_n"].to_numpy()))]
-        sides = int(log.meta.get("polygon_sides", 12))
+        sides = log.meta.planner.polygon_sides
         poly = force_polygon_vertices(float(tight["limit_front_n"]), sides) * _KN
         closed = np.vstack([poly, poly[:1]])
         ax.plot(closed[:, 0], closed[:, 1], color=color, lw=1.3, gid="limit_polygon",
@@ -94,7 +94,7 @@ def plot_planned_forces(logs: Sequence[RunLog], time_s: float, path: str | Path)
     """Planned front tire forces of each run's plan at ``time_s`` in the force plane.
 
     For each run: the planned (F_yf, F_xf) of every stage as points, the force-limit polygon
-    (regular ``meta["polygon_sides"]``-gon inscribed in the circle of radius ``limit_front_n``)
+    (regular ``meta.planner.polygon_sides``-gon inscribed in the circle of radius ``limit_front_n``)
     of the stage with the smallest limit, and the true friction circle μ_gt F_zf of that stage
     dashed. Forces in kN.
 

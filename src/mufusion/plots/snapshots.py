@@ -104,7 +104,7 @@ def build_snapshots_figure(logs: Sequence[RunLog], positions_m: Sequence[float])
         bar = fig.colorbar(surface, ax=axes, shrink=0.8, pad=0.01, aspect=30)
         bar.set_label("true friction μ [-]")
         bar.mappable.set_norm(FRICTION_NORM)
-    with_obstacles = any(log.meta.get("obstacles") for log in logs)
+    with_obstacles = any(log.meta.obstacles for log in logs)
     fig.suptitle("Top view: vehicle, planned trajectory (line with markers)"
                  + (", obstacle (red)" if with_obstacles else ""), fontsize=10)
     return fig
@@ -122,7 +122,7 @@ def plot_snapshots(logs: Sequence[RunLog], positions_m: Sequence[float], path: s
     logs : sequence of RunLog
         One row of panels per run (the paper: L vs F for the turn, P vs F for the pop-up).
     positions_m : sequence of float
-        Progress from the run's start ``s - meta["start_s_m"]`` [m], one column each
+        Progress from the run's start ``s - meta.start_s_m`` [m], one column each
         (paper: turn 0, 15, 30, 55 m; pop-up 0, 2, 18, 40 m).
     path : str or Path
         Output PNG file.

@@ -44,13 +44,13 @@ def build_traces_figure(logs: Sequence[RunLog]) -> Figure:
                       xytext=(-3, 2), textcoords="offset points", ha="right", va="bottom",
                       fontsize=7, color="0.3")
 
-    obstacles = meta.get("obstacles") or []
+    obstacles = meta.obstacles
     s0 = start_s(logs[0])
     for j, obstacle in enumerate(obstacles):
-        length, width = float(obstacle["length_m"]), float(obstacle["width_m"])
-        s_rel = float(obstacle["s_m"]) - s0
+        length, width = obstacle.length_m, obstacle.width_m
+        s_rel = obstacle.s_m - s0
         ax_d.add_patch(
-            Rectangle((s_rel - length / 2, float(obstacle["d_m"]) - width / 2), length, width,
+            Rectangle((s_rel - length / 2, obstacle.d_m - width / 2), length, width,
                       facecolor="tab:red", alpha=0.35, edgecolor="darkred",
                       label="obstacle (s-d footprint)" if j == 0 else None)
         )

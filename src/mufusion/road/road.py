@@ -111,9 +111,10 @@ def turn_road(
     lane_width_m: float = DEFAULT_LANE_WIDTH_M,
     friction: FrictionMap | None = None,
     obstacles: tuple[Obstacle, ...] = (),
+    angle_rad: float = math.pi / 2,
 ) -> Road:
-    """The paper's 90° turn: straight, clothoid, arc, clothoid, straight (starts at the origin,
-    heading +X).
+    """The paper's turn (90° by default): straight, clothoid, arc, clothoid, straight (starts at
+    the origin, heading +X).
 
     Parameters
     ----------
@@ -123,17 +124,20 @@ def turn_road(
         Straight lengths before and after the curve [m].
     clothoid_m
         Length of each clothoid transition [m]; 0 gives a curvature jump. The two clothoids turn
-        by ``clothoid_m / radius_m`` together, the arc by the rest of the 90°.
+        by ``clothoid_m / radius_m`` together, the arc by the rest of ``angle_rad``.
     direction
         ``"left"`` (default, κ > 0, ends heading +Y) or ``"right"`` (κ < 0, ends heading −Y).
     lane_width_m, friction, obstacles
         As in :class:`Road`; the default friction is μ = 1 everywhere.
+    angle_rad
+        Total heading change of the turn [rad], in (0, π] (paper: π/2).
 
     Raises
     ------
     ValueError
-        If a length is negative (approach/exit/clothoid), the radius is not > 0, the clothoids
-        alone would turn more than 90°, or ``direction`` is unknown.
+        If a length is negative (approach/exit/clothoid), the radius is not > 0, the angle is not
+        in (0, π], the clothoids alone would turn more than the angle, or ``direction`` is
+        unknown.
 
     Examples
     --------
@@ -148,10 +152,12 @@ def turn_road(
             raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
     if direction not in ("left", "right"):
         raise ValueError(f"direction must be 'left' or 'right', got {direction!r}")
-    arc_angle = math.pi / 2 - clothoid_m / radius_m
+    if not (math.isfinite(angle_rad) and 0.0 < angle_rad <= math.pi):
+        raise ValueError(f"angle_rad must be in (0, pi] rad, got {angle_rad!r}")
+    arc_angle = angle_rad - clothoid_m / radius_m
     if arc_angle < 0.0:
         raise ValueError(
-            f"clothoid_m must be <= radius_m * pi / 2 = {radius_m * math.pi / 2:.3f} m, "
+            f"clothoid_m must be <= radius_m * angle_rad = {radius_m * angle_rad:.3f} m, "
             f"got {clothoid_m!r}"
         )
     sign = 1.0 if direction == "left" else -1.0

@@ -1,8 +1,13 @@
-"""Built-in scenarios (``turn``, ``popup``) as validated TOML files, and their loader."""
+"""Built-in scenarios (``turn``, ``popup``) as validated TOML files, their loader and runner."""
 
 from mufusion.scenarios.config import (
-    BUILTIN_SCENARIOS,
+    SCENARIO_KINDS,
+    PopupScenario,
     ScenarioConfig,
+    TurnScenario,
+)
+from mufusion.scenarios.loading import (
+    BUILTIN_SCENARIOS,
     apply_overrides,
     load_scenario,
     scenario_from_dict,
@@ -10,7 +15,10 @@ from mufusion.scenarios.config import (
 
 __all__ = [
     "BUILTIN_SCENARIOS",
+    "SCENARIO_KINDS",
+    "PopupScenario",
     "ScenarioConfig",
+    "TurnScenario",
     "apply_overrides",
     "load_scenario",
     "scenario_from_dict",

@@ -19,7 +19,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from mufusion.configurations import CONFIGURATION_NAMES
 from mufusion.metrics import RunMetrics, attach_gt_comparison, compute_metrics
-from mufusion.scenarios.config import load_scenario
+from mufusion.scenarios.loading import load_scenario
 from mufusion.scenarios.runner import planner_for, run_scenario
 
 if sys.version_info >= (3, 11):

@@ -1,34 +1,53 @@
-"""Scenario configuration: validated (pydantic) models of the TOML files shipped with the package.
+"""Scenario configuration: one validated (pydantic) schema per scenario kind.
 
-Every field can be overridden with ``--set dotted.key=value`` on the command line
-(:func:`apply_overrides`); an unknown key or a value outside its range is a clear error naming the
-key, never a traceback from deep inside the simulator.
+A scenario is a :class:`TurnScenario` or a :class:`PopupScenario`, told apart by ``name``; each
+kind has only the keys it uses (a turn has no obstacle, a pop-up no turn), so a key that would do
+nothing is an error, never silently ignored. Each kind builds its own road
+(:meth:`TurnScenario.build_road`) and says where the planner may drive, so no code branches on
+the scenario's name.
 """
 
 from __future__ import annotations
 
-import json
-import sys
-from importlib import resources
-from pathlib import Path
+import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from mufusion.estimators import ErrorModel
+from mufusion.road import FrictionMap, Obstacle, Road, straight_road, turn_road
+from mufusion.sim.loop import LoopRates
+from mufusion.vehicle.params import VehicleParams
 
-ErrorModel = Literal["none", "worst_over", "worst_under", "random"]
+VehicleName = Literal["truck", "car"]
+"""The vehicle presets (:data:`mufusion.vehicle.params.PRESETS`; a test keeps them in step)."""
 
 PositiveFloat = Annotated[float, Field(gt=0.0, allow_inf_nan=False)]
 NonNegFloat = Annotated[float, Field(ge=0.0, allow_inf_nan=False)]
 Friction = Annotated[float, Field(gt=0.0, le=1.5, allow_inf_nan=False)]
 
+FOOTPRINT_MARGIN_M = 0.1
+"""Extra room the planner keeps between its reference point's bounds and the lane edges [m]:
+the planner bounds its reference point (and takes a curve's bulge off the outer side); the
+footprint's corners reach further still when the vehicle is yawed against the lane, and the plant
+tracks the plan to about a decimetre at the friction limit."""
+
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _no_bool_for_numbers(cls, data: Any) -> Any:
+        # Pydantic would read `true` as 1.0: a boolean is never a number here.
+        if isinstance(data, dict):
+            for key, value in data.items():
+                field = cls.model_fields.get(key)
+                if field is not None and isinstance(value, bool) and field.annotation is not bool:
+                    raise ValueError(
+                        f"{key}: expected a number, got the boolean {str(value).lower()}"
+                    )
+        return data
 
 
 class RoadConfig(_Strict):
@@ -39,25 +58,38 @@ class RoadConfig(_Strict):
     """Total length of a straight road (``popup``) or of the straight after the turn (``turn``)."""
 
 
-class TurnConfig(_Strict):
+class TurnGeometry(_Strict):
     radius_m: Annotated[float, Field(ge=10.0, le=500.0)] = 28.0
-    angle_rad: Annotated[float, Field(gt=0.0, le=3.2)] = 1.5707963267948966
+    angle_rad: Annotated[float, Field(gt=0.0, le=math.pi)] = math.pi / 2
+    """Heading change of the whole turn, clothoids included [rad]."""
     direction: Literal["left", "right"] = "right"
     """Right-hand traffic: in a right turn the outside of the curve is the opposing lane."""
     start_ahead_m: Annotated[float, Field(ge=0.0, le=200.0)] = 20.0
     """Distance from the vehicle's start to the beginning of the curve (its entry clothoid)."""
     clothoid_m: Annotated[float, Field(ge=0.0, le=50.0)] = 5.0
 
+    @model_validator(mode="after")
+    def _clothoids_fit(self) -> TurnGeometry:
+        if self.clothoid_m > self.radius_m * self.angle_rad:
+            raise ValueError(
+                f"clothoid_m must be <= radius_m * angle_rad = "
+                f"{self.radius_m * self.angle_rad:.2f} m, got {self.clothoid_m}"
+            )
+        return self
 
-class FrictionConfig(_Strict):
-    mu: Friction = 1.0
-    """Friction everywhere (``popup``)."""
+
+class TurnFriction(_Strict):
     mu_before: Friction = 0.8
-    """Friction before the change point (``turn``)."""
+    """Friction before the change point."""
     mu_turn: Friction = 0.4
-    """Friction from the change point on (``turn``)."""
+    """Friction from the change point on."""
     change_ahead_m: Annotated[float, Field(ge=-50.0, le=200.0)] = 0.0
     """Where the friction changes, relative to the vehicle's start (paper: at s = 0)."""
+
+
+class UniformFriction(_Strict):
+    mu: Friction = 1.0
+    """Friction everywhere."""
 
 
 class ObstacleConfig(_Strict):
@@ -95,162 +127,136 @@ class SimSettings(_Strict):
     controller_rate_hz: Annotated[float, Field(ge=50.0, le=500.0)] = 50.0
 
 
-class ScenarioConfig(_Strict):
-    """One closed-loop experiment: road, friction, obstacle, vehicle, estimation, solver."""
+class _Scenario(_Strict):
+    """What every scenario kind has: vehicle, speeds, duration, seed, estimation, solver."""
 
-    name: Literal["turn", "popup"]
     description: str = ""
-    vehicle: Literal["truck", "car"] = "truck"
+    vehicle: VehicleName = "truck"
     initial_speed_mps: Annotated[float, Field(gt=0.0, le=40.0)] = 12.0
     reference_speed_mps: Annotated[float, Field(gt=0.0, le=40.0)] | None = None
     """Cruise speed the planner tracks; defaults to the initial speed."""
     duration_s: Annotated[float, Field(gt=0.0, le=120.0)] = 10.0
     seed: Annotated[int, Field(ge=0)] = 0
-    emergency_on_obstacle: bool = False
-    """Switch the planner to its emergency (stop) mode when an obstacle appears."""
+    comparison_time_s: NonNegFloat = 0.0
+    """Instant whose plan and estimate are compared between configurations (the paper's
+    Fig. 3k/4k): planned-force utilisation against GT is measured there."""
     road: RoadConfig = RoadConfig()
-    turn: TurnConfig = TurnConfig()
-    friction: FrictionConfig = FrictionConfig()
-    obstacle: ObstacleConfig | None = None
     estimation: EstimationConfig = EstimationConfig()
     planner: PlannerSettings = PlannerSettings()
     sim: SimSettings = SimSettings()
 
     @model_validator(mode="after")
-    def _check(self) -> ScenarioConfig:
-        if self.name == "popup" and self.obstacle is None:
-            raise ValueError("obstacle: the popup scenario needs an [obstacle] table")
+    def _check_common(self) -> _Scenario:
+        if self.comparison_time_s >= self.duration_s:
+            raise ValueError(
+                f"duration_s must exceed comparison_time_s = {self.comparison_time_s} s "
+                f"(the instant the runs are compared at), got {self.duration_s}"
+            )
+        try:
+            self.rates()
+        except ValueError as err:  # re-raised with the scenario's key names
+            raise ValueError(
+                str(err)
+                .replace("plant_hz", "sim.plant_rate_hz")
+                .replace("controller_hz", "sim.controller_rate_hz")
+                .replace("planner_hz", "planner.rate_hz")
+            ) from None
         return self
 
     @property
     def cruise_speed_mps(self) -> float:
         return self.reference_speed_mps or self.initial_speed_mps
 
+    def rates(self) -> LoopRates:
+        """The loop's component rates."""
+        return LoopRates(self.sim.plant_rate_hz, self.sim.controller_rate_hz, self.planner.rate_hz)
 
-BUILTIN_SCENARIOS: tuple[str, ...] = ("turn", "popup")
-
-
-def _format_validation_error(err: ValidationError, source: str) -> str:
-    lines = [f"invalid scenario {source}:"]
-    for e in err.errors():
-        loc = ".".join(str(p) for p in e["loc"]) or "(top level)"
-        lines.append(f"  {loc}: {e['msg']}")
-    return "\n".join(lines)
+    @property
+    def start_s_m(self) -> float:
+        """The vehicle's start progress ``s0`` [m] (the paper's "s = 0")."""
+        return self.road.approach_m
 
 
-def scenario_from_dict(data: dict[str, Any], source: str = "<dict>") -> ScenarioConfig:
-    """Validate a scenario mapping.
+class TurnScenario(_Scenario):
+    """Paper scenario 1: a turn on low friction after high friction; keep the lane."""
 
-    Raises
-    ------
-    ValueError
-        With one line per invalid field, each naming its dotted key and the allowed range.
-    """
-    try:
-        return ScenarioConfig.model_validate(data)
-    except ValidationError as err:
-        raise ValueError(_format_validation_error(err, source)) from None
+    name: Literal["turn"]
+    turn: TurnGeometry = TurnGeometry()
+    friction: TurnFriction = TurnFriction()
 
-
-def _raw_builtin(name: str) -> dict[str, Any]:
-    if name not in BUILTIN_SCENARIOS:
-        raise ValueError(
-            f"scenario must be one of {list(BUILTIN_SCENARIOS)} or a .toml path, got {name!r}"
+    def build_road(self, params: VehicleParams) -> Road:
+        """Straight, the turn (clothoids, arc), straight; friction steps at the change point."""
+        s0 = self.start_s_m
+        friction = FrictionMap.step(
+            self.friction.mu_before, self.friction.mu_turn, s0 + self.friction.change_ahead_m
         )
-    text = resources.files("mufusion.scenarios").joinpath(f"{name}.toml").read_text()
-    return tomllib.loads(text)
+        return turn_road(
+            radius_m=self.turn.radius_m,
+            approach_m=s0 + self.turn.start_ahead_m,
+            exit_m=self.road.length_m,
+            clothoid_m=self.turn.clothoid_m,
+            direction=self.turn.direction,
+            lane_width_m=self.road.lane_width_m,
+            friction=friction,
+            angle_rad=self.turn.angle_rad,
+        )
+
+    def drivable_d_m(self) -> tuple[float, float]:
+        """Where the vehicle may drive: its own lane (the opposing lane is not for driving)."""
+        w = self.road.lane_width_m
+        return -0.5 * w, 0.5 * w
 
 
-def _raw_scenario(name_or_path: str | Path) -> tuple[dict[str, Any], str]:
-    path = Path(name_or_path)
-    if path.suffix == ".toml":
-        if not path.is_file():
-            raise ValueError(f"scenario file {str(path)!r} does not exist")
-        try:
-            return tomllib.loads(path.read_text()), str(path)
-        except tomllib.TOMLDecodeError as err:
-            raise ValueError(f"scenario file {str(path)!r} is not valid TOML: {err}") from None
-    return _raw_builtin(str(name_or_path)), f"'{name_or_path}'"
+class PopupScenario(_Scenario):
+    """Paper scenario 2: an obstacle appears ahead in the lane; avoid it."""
+
+    name: Literal["popup"]
+    friction: UniformFriction = UniformFriction()
+    obstacle: ObstacleConfig
+    emergency_on_obstacle: bool = False
+    """Switch the planner to its emergency (stop) mode when an obstacle appears."""
+    comparison_time_s: NonNegFloat = 0.5
+
+    def build_road(self, params: VehicleParams) -> Road:
+        """A straight two-lane road, the obstacle ``distance_m`` ahead of the vehicle's front."""
+        s0, ob = self.start_s_m, self.obstacle
+        # The footprint is centred between the axles; its front lies this far ahead of the CoG.
+        front_m = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
+        front_m += 0.5 * params.length_m
+        obstacle = Obstacle(
+            s_m=s0 + front_m + ob.distance_m,
+            d_m=ob.lateral_offset_m,
+            length_m=ob.length_m,
+            width_m=ob.width_m,
+            appear_at_time_s=ob.appear_at_s,
+        )
+        return straight_road(
+            s0 + self.road.length_m,
+            lane_width_m=self.road.lane_width_m,
+            friction=FrictionMap.uniform(self.friction.mu),
+            obstacles=(obstacle,),
+        )
+
+    def drivable_d_m(self) -> tuple[float, float]:
+        """Where the vehicle may drive: the whole road (both lanes) to evade."""
+        w = self.road.lane_width_m
+        return -0.5 * w, 1.5 * w
 
 
-def _parse_value(text: str) -> Any:
-    # TOML/JSON literals first (numbers, booleans, quoted strings, arrays); a bare word is a string.
-    # "none" is a value of the error-model fields; only "null" clears an optional field.
-    lowered = text.strip()
-    if lowered == "null":
-        return None
-    try:
-        return json.loads(lowered)
-    except json.JSONDecodeError:
-        pass
-    try:
-        return tomllib.loads(f"v = {lowered}")["v"]
-    except tomllib.TOMLDecodeError:
-        return lowered
+ScenarioConfig = Annotated[TurnScenario | PopupScenario, Field(discriminator="name")]
+"""A validated scenario of either kind."""
+
+SCENARIO_KINDS: dict[str, type[TurnScenario] | type[PopupScenario]] = {
+    "turn": TurnScenario,
+    "popup": PopupScenario,
+}
 
 
-def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any]:
-    """Return a copy of ``data`` with ``dotted.key=value`` overrides applied.
-
-    Raises
-    ------
-    ValueError
-        If an override is not of the form ``key=value`` or names a key the schema does not have.
-    """
-    out = json.loads(json.dumps(data))
-    for item in overrides:
-        if "=" not in item:
-            raise ValueError(f"--set expects dotted.key=value, got {item!r}")
-        key, _, raw = item.partition("=")
-        parts = [p for p in key.strip().split(".") if p]
-        if not parts:
-            raise ValueError(f"--set expects dotted.key=value, got {item!r}")
-        _check_key(parts, item)
-        node = out
-        for p in parts[:-1]:
-            if not isinstance(node.get(p), dict):
-                node[p] = {}
-            node = node[p]
-        node[parts[-1]] = _parse_value(raw)
-    return out
-
-
-def _check_key(parts: list[str], item: str) -> None:
-    model: type[BaseModel] | None = ScenarioConfig
-    for i, p in enumerate(parts):
-        if model is None or p not in model.model_fields:
-            allowed = sorted(model.model_fields) if model is not None else []
-            where = ".".join(parts[:i]) or "top level"
-            raise ValueError(
-                f"--set {item!r}: unknown key {'.'.join(parts[: i + 1])!r}; "
-                f"keys at {where}: {', '.join(allowed)}"
-            )
-        annotation = model.model_fields[p].annotation
-        model = _submodel(annotation)
-
-
-def _submodel(annotation: Any) -> type[BaseModel] | None:
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in getattr(annotation, "__args__", ()) or ():
-        if isinstance(arg, type) and issubclass(arg, BaseModel):
-            return arg
-    return None
-
-
-def load_scenario(name_or_path: str | Path, overrides: list[str] | None = None) -> ScenarioConfig:
-    """Load a built-in scenario (``"turn"``, ``"popup"``) or a TOML file, with overrides applied.
-
-    Raises
-    ------
-    ValueError
-        Unknown scenario, unreadable file, unknown override key, or an invalid field (the message
-        names the dotted key and the allowed range).
-
-    Examples
-    --------
-    >>> load_scenario("popup", ["obstacle.distance_m=25"]).obstacle.distance_m
-    25.0
-    """
-    raw, source = _raw_scenario(name_or_path)
-    return scenario_from_dict(apply_overrides(raw, overrides or []), source)
+def planner_lane_bounds_m(
+    cfg: TurnScenario | PopupScenario, params: VehicleParams
+) -> tuple[float, float]:
+    """Bounds on the planner's lateral offset: the drivable band's edges shrunk by half the
+    vehicle width (TAMP framework) and by :data:`FOOTPRINT_MARGIN_M`."""
+    lo, hi = cfg.drivable_d_m()
+    half = 0.5 * params.width_m + FOOTPRINT_MARGIN_M
+    return lo + half, hi - half

@@ -1,104 +1,147 @@
-"""One run log: everything a metric or a figure needs, written as CSV + JSON, read back with pandas.
+"""One run log: typed records in, pandas tables out, CSV + JSON on disk.
 
-Files in a run directory:
+The tables and their columns are the record types of :mod:`mufusion.sim.records`; a saved run is
+checked against them when it is loaded, so a reader never meets a missing or renamed column.
 
-``meta.json``
-    scenario configuration, friction configuration, vehicle, road description, obstacles, rates.
-``timeseries.csv``
-    one row per controller tick: time, plant state (Cartesian and Frenet), actuator commands,
-    tire utilisation per axle, true friction per axle, estimator availability, obstacle flags.
-``planning_steps.csv``
-    one row per planning step: solver status, fallback, sampling re-initialisation, local estimate.
-``plans.csv``
-    one row per planning step and stage: planned state and tire forces, the force limits used.
-``estimates.csv``
-    one row per planning step and grid point: true μ, μ̂ and (fused configurations) the posterior
-    mean and standard deviation.
-``timing.csv``
-    wall-clock solve times per planning step. Kept apart because it is the only part of a run that
-    is not a deterministic function of the scenario and its seed.
+Files in a run directory: ``meta.json`` (:class:`~mufusion.sim.records.RunMeta`) and one
+``<table>.csv`` per record type.
 """
 
 from __future__ import annotations
 
-import json
-from dataclasses import dataclass, field
+import math
+import os
+import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-_TABLES = ("timeseries", "planning_steps", "plans", "estimates", "timing")
+from mufusion.sim.records import (
+    RECORD_TYPES,
+    EstimateGrid,
+    Event,
+    PlanningStep,
+    PlanStages,
+    RunMeta,
+    StepTiming,
+    Tick,
+    columns,
+)
+
+TABLES: tuple[str, ...] = tuple(RECORD_TYPES)
+
+Record = Tick | PlanningStep | StepTiming | Event | PlanStages | EstimateGrid
 
 
-@dataclass
 class RunLog:
-    """Records of one closed-loop run; appended to by the simulator, read by metrics and plots."""
+    """Records of one closed-loop run; appended to by the recorder, read by metrics and plots.
 
-    meta: dict[str, Any] = field(default_factory=dict)
-    _rows: dict[str, list[dict[str, Any]]] = field(
-        default_factory=lambda: {name: [] for name in _TABLES}
-    )
-    _block_rows: dict[str, list[pd.DataFrame]] = field(
-        default_factory=lambda: {name: [] for name in _TABLES}
-    )
-    _frames: dict[str, pd.DataFrame] | None = None
+    Parameters
+    ----------
+    meta
+        The run's metadata.
+    """
 
-    def append(self, table: str, row: dict[str, Any]) -> None:
-        """Append one row (a flat mapping of column name to scalar) to ``table``."""
-        self._rows[table].append(row)
-        self._frames = None
+    def __init__(self, meta: RunMeta) -> None:
+        self.meta = meta
+        self._records: dict[str, list[Any]] = {name: [] for name in TABLES}
+        self._frames: dict[str, pd.DataFrame] = {}
 
-    def append_block(self, table: str, columns: dict[str, Any]) -> None:
-        """Append several rows at once, given as equal-length column arrays (or scalars)."""
-        self._block_rows[table].append(pd.DataFrame(columns))
-        self._frames = None
+    def append(self, record: Record) -> None:
+        """Append one record (a row, or a block of rows) to its table."""
+        self._records[record.table].append(record)
+        self._frames.pop(record.table, None)
+
+    def extend(self, records: Iterable[Record]) -> None:
+        """Append several records."""
+        for record in records:
+            self.append(record)
 
     def frame(self, table: str) -> pd.DataFrame:
-        """The table as a DataFrame (rows in the order they were appended)."""
-        if table not in _TABLES:
-            raise ValueError(f"table must be one of {list(_TABLES)}, got {table!r}")
-        if self._frames is None:
-            self._frames = {}
+        """The table as a DataFrame with the record type's columns, rows in append order.
+
+        Raises
+        ------
+        ValueError
+            If ``table`` is not one of :data:`TABLES`.
+        """
+        if table not in RECORD_TYPES:
+            raise ValueError(f"table must be one of {list(TABLES)}, got {table!r}")
         if table not in self._frames:
-            parts = []
-            if self._rows[table]:
-                parts.append(pd.DataFrame(self._rows[table]))
-            parts.extend(self._block_rows[table])
-            self._frames[table] = (
-                pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
-            )
+            self._frames[table] = _to_frame(RECORD_TYPES[table], self._records[table])
         return self._frames[table]
 
     @property
     def timeseries(self) -> pd.DataFrame:
-        return self.frame("timeseries")
+        return self.frame(Tick.table)
 
     @property
     def planning_steps(self) -> pd.DataFrame:
-        return self.frame("planning_steps")
+        return self.frame(PlanningStep.table)
 
     @property
     def plans(self) -> pd.DataFrame:
-        return self.frame("plans")
+        return self.frame(PlanStages.table)
 
     @property
     def estimates(self) -> pd.DataFrame:
-        return self.frame("estimates")
+        return self.frame(EstimateGrid.table)
 
     @property
     def timing(self) -> pd.DataFrame:
-        return self.frame("timing")
+        return self.frame(StepTiming.table)
+
+    @property
+    def events(self) -> pd.DataFrame:
+        return self.frame(Event.table)
 
     def save(self, directory: str | Path) -> Path:
-        """Write the log into ``directory`` (created if needed); returns the directory."""
+        """Write the log into ``directory`` (created if needed); returns the directory.
+
+        Each file is written under a temporary name and renamed, so a reader (or an interrupted
+        campaign) never sees a half-written file.
+        """
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        (out / "meta.json").write_text(json.dumps(_jsonable(self.meta), indent=2))
-        for table in _TABLES:
-            self.frame(table).to_csv(out / f"{table}.csv", index=False, float_format="%.9g")
+        _write_atomic(out / "meta.json", self.meta.model_dump_json(indent=1))
+        for table in TABLES:
+            _write_atomic(
+                out / f"{table}.csv", self.frame(table).to_csv(index=False, float_format="%.9g")
+            )
         return out
+
+
+def _to_frame(record_type: type, records: list[Any]) -> pd.DataFrame:
+    names = columns(record_type)
+    if not records:
+        return pd.DataFrame({name: pd.Series(dtype=float) for name in names})
+    if record_type in _BLOCKS:
+        # Blocks: one concatenation per column (scalars repeat over the block's rows).
+        sizes = [len(r.k if isinstance(r, PlanStages) else r.s_ahead_m) for r in records]
+        pairs = list(zip(records, sizes, strict=True))
+        data = {
+            name: np.concatenate([np.broadcast_to(getattr(r, name), (n,)) for r, n in pairs])
+            for name in names
+        }
+        return pd.DataFrame(data, columns=list(names))
+    return pd.DataFrame.from_records([tuple(vars(r).values()) for r in records], columns=names)
+
+
+_BLOCKS = (PlanStages, EstimateGrid)
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def load_run(directory: str | Path) -> RunLog:
@@ -107,31 +150,40 @@ def load_run(directory: str | Path) -> RunLog:
     Raises
     ------
     ValueError
-        If ``directory`` is not a run directory (no ``meta.json``).
+        If ``directory`` is not a run directory (no ``meta.json``), the metadata does not match
+        :class:`~mufusion.sim.records.RunMeta`, or a table lacks one of its record's columns
+        (the message names them).
     """
     path = Path(directory)
-    if not (path / "meta.json").is_file():
+    meta_file = path / "meta.json"
+    if not meta_file.is_file():
         raise ValueError(f"{str(path)!r} is not a mufusion run directory (no meta.json)")
-    log = RunLog(meta=json.loads((path / "meta.json").read_text()))
-    log._frames = {}
-    for table in _TABLES:
+    try:
+        meta = RunMeta.model_validate_json(meta_file.read_text(encoding="utf-8"))
+    except ValueError as err:
+        raise ValueError(f"{str(meta_file)!r} is not a valid run metadata file: {err}") from None
+    log = RunLog(meta)
+    for table, record_type in RECORD_TYPES.items():
         file = path / f"{table}.csv"
-        try:
-            log._frames[table] = pd.read_csv(file) if file.is_file() else pd.DataFrame()
-        except pd.errors.EmptyDataError:
-            log._frames[table] = pd.DataFrame()
+        frame = _read_table(file)
+        if frame is None:
+            frame = _to_frame(record_type, [])
+        missing = [c for c in columns(record_type) if c not in frame.columns]
+        if missing:
+            raise ValueError(f"{str(file)!r} lacks the columns {missing} of table {table!r}")
+        log._frames[table] = frame
     return log
 
 
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, float) and not np.isfinite(value):
+def _read_table(file: Path) -> pd.DataFrame | None:
+    if not file.is_file():
         return None
-    return value
+    try:
+        return pd.read_csv(file)
+    except pd.errors.EmptyDataError:
+        return None
+
+
+def finite_or_nan(value: float | None) -> float:
+    """``value`` as a float, NaN for None or a non-finite value (for optional columns)."""
+    return math.nan if value is None or not math.isfinite(value) else float(value)

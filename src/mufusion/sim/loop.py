@@ -4,20 +4,25 @@ Each component exposes one step-like call, so one tick of the loop reads in a fe
 (do-mpc's ``u = mpc.make_step(x); y = sim.make_step(u)``): the planner runs every
 ``plant_hz / planner_hz`` plant steps with the current friction estimate, the controller every
 ``plant_hz / controller_hz`` steps, the plant every step with the true friction under each axle.
-Everything a metric or a figure needs is appended to one :class:`~mufusion.sim.log.RunLog`.
+What happens is written by a :class:`~mufusion.sim.recorder.Recorder` into one
+:class:`~mufusion.sim.log.RunLog`; the loop itself only steps the world.
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Literal, Protocol
 
 import numpy as np
 
+from mufusion.configurations import FrictionEstimate
+from mufusion.planner import Plan, PlannerObstacle
 from mufusion.sim.log import RunLog
+from mufusion.sim.recorder import Recorder
+from mufusion.sim.records import RunMeta
 from mufusion.sim.world import World
 from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.params import VehicleParams
@@ -26,10 +31,19 @@ from mufusion.vehicle.plant import PlantOutput, PlantState
 
 _log = logging.getLogger(__name__)
 
+PlanningMode = Literal["cruise", "evade", "emergency"]
+
 
 @dataclass(frozen=True)
 class LoopRates:
-    """Rates of the loop's components [Hz]; the plant rate must be a multiple of the others."""
+    """Rates of the loop's components [Hz]; the plant rate must be a multiple of the others.
+
+    Raises
+    ------
+    ValueError
+        If a rate is not positive and finite, or the rates do not divide into whole steps
+        (the message names the rate).
+    """
 
     plant_hz: float = 200.0
     controller_hz: float = 50.0
@@ -40,20 +54,9 @@ class LoopRates:
             value = getattr(self, name)
             if not np.isfinite(value) or value <= 0:
                 raise ValueError(f"{name} must be a positive rate in Hz, got {value!r}")
-        for name in ("controller_hz", "planner_hz"):
-            ratio = self.plant_hz / getattr(self, name)
-            if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
-                raise ValueError(
-                    f"{name} must divide plant_hz={self.plant_hz} into whole steps, "
-                    f"got {getattr(self, name)}"
-                )
-
-        ratio = self.controller_hz / self.planner_hz
-        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
-            raise ValueError(
-                f"planner_hz must divide controller_hz={self.controller_hz} into whole steps, "
-                f"got {self.planner_hz}"
-            )
+        _check_divides("controller_hz", self.controller_hz, "plant_hz", self.plant_hz)
+        _check_divides("planner_hz", self.planner_hz, "plant_hz", self.plant_hz)
+        _check_divides("planner_hz", self.planner_hz, "controller_hz", self.controller_hz)
 
     @property
     def controller_every(self) -> int:
@@ -64,18 +67,63 @@ class LoopRates:
         return round(self.plant_hz / self.planner_hz)
 
 
+def _check_divides(name: str, value: float, base_name: str, base: float) -> None:
+    ratio = base / value
+    if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+        raise ValueError(
+            f"{name} must divide {base_name}={base:g} Hz into whole steps, got {value:g} Hz"
+        )
+
+
 class FrictionSource(Protocol):
-    def step(self, s_ahead_m: np.ndarray, mu_true_ahead: np.ndarray, utilization: float) -> Any: ...
+    """A friction estimate over the grid ahead, once per planning step (see
+    :mod:`mufusion.configurations`)."""
+
+    def step(
+        self, s_ahead_m: np.ndarray, mu_true_ahead: np.ndarray, utilization: float
+    ) -> FrictionEstimate: ...
 
 
 class Planner(Protocol):
-    def step(self, x0: np.ndarray, t_s: float, **kwargs: Any) -> Any: ...
+    """A motion planner with :class:`~mufusion.planner.TractionAdaptivePlanner`'s step."""
+
+    def step(
+        self,
+        x0: np.ndarray,
+        t_s: float,
+        curvature_of_s: Callable[[np.ndarray], np.ndarray],
+        mu_hat_of_s: Callable[[np.ndarray], np.ndarray],
+        obstacles: Sequence[PlannerObstacle] = (),
+        mode: PlanningMode = "cruise",
+        reference_speed_mps: float = 10.0,
+        reference_d_m: float = 0.0,
+        lane_d_min_m: float | None = None,
+        lane_d_max_m: float | None = None,
+    ) -> Plan: ...
 
 
 class Controller(Protocol):
+    """Turns the current plan into actuator commands."""
+
     def command(
-        self, t_s: float, x_frenet: np.ndarray, steer_rad_now: float, plan: Any, curvature: float
+        self,
+        t_s: float,
+        x_frenet: np.ndarray,
+        steer_rad_now: float,
+        plan: Plan,
+        curvature_1pm_now: float = 0.0,
     ) -> ActuatorCommand: ...
+
+
+class PlantModel(Protocol):
+    """The simulated vehicle (see :class:`~mufusion.vehicle.plant.Plant`)."""
+
+    @property
+    def x(self) -> np.ndarray: ...
+
+    def step(
+        self, command: ActuatorCommand, mu_front: float, mu_rear: float
+    ) -> PlantOutput: ...
 
 
 @dataclass
@@ -96,26 +144,26 @@ class ClosedLoop:
         Cruise speed the planner tracks.
     lane_bounds_m
         ``(d_min, d_max)`` the planner's reference point must stay within (lane or road).
+    meta
+        The run's metadata (written into the log).
     estimate_grid_m
         Distances ahead at which friction is estimated [m] (paper: 0, 1, …, 50).
     emergency_on_obstacle
         Switch the planner to its emergency (stop) mode once an obstacle is active.
-    meta
-        Extra metadata for the log.
     """
 
     world: World
     params: VehicleParams
-    plant: Any
+    plant: PlantModel
     planner: Planner
     controller: Controller
     friction: FrictionSource
     rates: LoopRates
     reference_speed_mps: float
     lane_bounds_m: tuple[float, float]
+    meta: RunMeta
     estimate_grid_m: np.ndarray = field(default_factory=lambda: np.arange(0.0, 51.0, 1.0))
     emergency_on_obstacle: bool = False
-    meta: dict[str, Any] = field(default_factory=dict)
 
     def run(
         self,
@@ -139,20 +187,24 @@ class ClosedLoop:
         rates = self.rates
         dt = 1.0 / rates.plant_hz
         n_steps = round(duration_s * rates.plant_hz)
-        log = RunLog(meta=dict(self.meta))
-        plan = None
+        log = RunLog(self.meta)
+        recorder = Recorder(log, self.world, self.params, self.estimate_grid_m)
         command = ActuatorCommand(0.0, 0.0, 0.0)
         plan_step = -1
         util_window = 0.0
-        local_available = False
         last: PlantOutput | None = None
         road_end = self.world.road_length_m - self.params.length_m
         self._warm_up(warmup_steps)
 
+        xf = self.world.frenet_state(self.plant.x)
+        s_ego = float(xf[State.s])
+        plan: Plan | None = None
+        estimate: FrictionEstimate | None = None
         for i in range(n_steps + 1):
             t = i * dt
             x_plant = self.plant.x
-            if i % rates.controller_every == 0:
+            control_tick = i % rates.controller_every == 0
+            if control_tick:
                 # The planner's rate divides the controller's, so this also serves planning steps.
                 xf = self.world.frenet_state(x_plant)
                 s_ego = float(xf[State.s])
@@ -161,18 +213,29 @@ class ClosedLoop:
                 plan_step += 1
                 estimate = self._estimate(s_ego, util_window)
                 util_window = 0.0
-                local_available = bool(getattr(estimate, "local_available", False))
-                plan = self._plan(t, xf, estimate, plan_step, log)
+                obstacles = self.world.planner_obstacles(t, s_ego, behind_m=self.params.length_m)
+                mode = self._mode(obstacles)
+                started = time.perf_counter()
+                plan = self._plan(xf, t, estimate, obstacles, mode)
+                step_ms = 1e3 * (time.perf_counter() - started)
+                if not plan.ok:
+                    _log.warning(
+                        "planning step %d at t=%.2f s: solver status %s", plan_step, t, plan.status
+                    )
+                recorder.planning_step(plan_step, t, s_ego, plan, estimate, mode, step_ms)
                 if progress:
                     progress(t)
 
-            if i % rates.controller_every == 0:
+            if control_tick:
+                assert plan is not None and estimate is not None  # planned at i = 0
                 steer_now = float(x_plant[PlantState.STEER])
                 command = self.controller.command(
                     t, xf, steer_now, plan, float(self.world.curvature(np.array([s_ego]))[0])
                 ).clipped(self.params)
-                collided = self._log_tick(log, t, x_plant, xf, command, local_available, last)
-                if collided or s_ego >= road_end:
+                status = recorder.tick(
+                    t, x_plant, xf, command, estimate.local_available, last, "plan"
+                )
+                if status.in_collision or s_ego >= road_end:
                     break
 
             mu_front, mu_rear = self.world.friction_under_axles(x_plant, self.params)
@@ -180,45 +243,37 @@ class ClosedLoop:
             util_window = max(util_window, last.utilization_front, last.utilization_rear)
         return log
 
+    def _mode(self, obstacles: Sequence[PlannerObstacle]) -> PlanningMode:
+        if not obstacles:
+            return "cruise"
+        return "emergency" if self.emergency_on_obstacle else "evade"
+
     def _warm_up(self, steps: int) -> None:
         xf = self.world.frenet_state(self.plant.x)
-        s_ego = float(xf[State.s])
-        grid_abs = s_ego + self.estimate_grid_m
-        estimate = self._estimate(s_ego, 0.0)
-        mu_hat_grid = np.asarray(estimate.mu_hat, dtype=float)
+        estimate = self._estimate(float(xf[State.s]), 0.0)
         for k in range(steps):
-            self.planner.step(
-                xf,
-                -(steps - k) / self.rates.planner_hz,
-                curvature_of_s=self.world.curvature,
-                mu_hat_of_s=lambda s: np.interp(np.asarray(s, float), grid_abs, mu_hat_grid),
-                obstacles=[],
-                mode="cruise",
-                reference_speed_mps=self.reference_speed_mps,
-                reference_d_m=0.0,
-                lane_d_min_m=self.lane_bounds_m[0],
-                lane_d_max_m=self.lane_bounds_m[1],
-            )
+            self._plan(xf, -(steps - k) / self.rates.planner_hz, estimate, [], "cruise")
 
-    # -- one planning step ------------------------------------------------------------------
-    def _estimate(self, s_ego: float, utilization: float) -> Any:
+    def _estimate(self, s_ego: float, utilization: float) -> FrictionEstimate:
         s_abs = s_ego + self.estimate_grid_m
-        mu_true = self.world.friction(s_abs)
-        return self.friction.step(self.estimate_grid_m, mu_true, utilization)
+        return self.friction.step(self.estimate_grid_m, self.world.friction(s_abs), utilization)
 
-    def _plan(self, t: float, xf: np.ndarray, estimate: Any, step: int, log: RunLog) -> Any:
-        s_ego = float(xf[State.s])
-        grid_abs = s_ego + self.estimate_grid_m
+    def _plan(
+        self,
+        xf: np.ndarray,
+        t: float,
+        estimate: FrictionEstimate,
+        obstacles: Sequence[PlannerObstacle],
+        mode: PlanningMode,
+    ) -> Plan:
+        grid_abs = float(xf[State.s]) + self.estimate_grid_m
         mu_hat_grid = np.asarray(estimate.mu_hat, dtype=float)
 
         def mu_hat_of_s(s: np.ndarray) -> np.ndarray:
             # Beyond the camera's range the last estimate is held (TAMP framework).
             return np.interp(np.asarray(s, dtype=float), grid_abs, mu_hat_grid)
 
-        obstacles = self.world.planner_obstacles(t, s_ego, behind_m=self.params.length_m)
-        mode = ("emergency" if self.emergency_on_obstacle else "evade") if obstacles else "cruise"
-        started = time.perf_counter()
-        plan = self.planner.step(
+        return self.planner.step(
             xf,
             t,
             curvature_of_s=self.world.curvature,
@@ -230,151 +285,3 @@ class ClosedLoop:
             lane_d_min_m=self.lane_bounds_m[0],
             lane_d_max_m=self.lane_bounds_m[1],
         )
-        step_ms = 1e3 * (time.perf_counter() - started)
-        if not plan.ok:
-            _log.warning("planning step %d at t=%.2f s: solver status %s", step, t, plan.status)
-        self._log_plan(log, step, t, plan, estimate, mode, step_ms, grid_abs)
-        return plan
-
-    # -- logging ----------------------------------------------------------------------------
-    def _log_plan(
-        self,
-        log: RunLog,
-        step: int,
-        t: float,
-        plan: Any,
-        estimate: Any,
-        mode: str,
-        step_ms: float,
-        grid_abs: np.ndarray,
-    ) -> None:
-        local_mu = getattr(estimate, "local_mu", None)
-        log.append(
-            "planning_steps",
-            {
-                "step": step,
-                "t_s": t,
-                "s_m": float(grid_abs[0]),
-                "mode": mode,
-                "status": int(plan.status),
-                "ok": bool(plan.ok),
-                "fallback": bool(plan.fallback),
-                "sampled_reinit": bool(plan.sampled_reinit),
-                "local_available": bool(getattr(estimate, "local_available", False)),
-                "local_mu": np.nan if local_mu is None else float(local_mu),
-            },
-        )
-        log.append(
-            "timing",
-            {"step": step, "t_s": t, "solve_ms": 1e3 * plan.solve_time_s, "step_ms": step_ms},
-        )
-        states = np.asarray(plan.states)[:-1]
-        n = states.shape[0]
-        s_k, d_k = states[:, State.s], states[:, State.d]
-        x_k, y_k = self.world.to_cartesian(s_k, d_k)
-        inputs = np.asarray(plan.inputs)
-        log.append_block(
-            "plans",
-            {
-                "step": np.full(n, step),
-                "t_s": np.full(n, t),
-                "k": np.arange(n),
-                "t_k_s": t + np.arange(n) * float(self.meta.get("planner_dt_s", 0.1)),
-                "s_m": s_k,
-                "d_m": d_k,
-                "dpsi_rad": states[:, State.dpsi],
-                "psidot_radps": states[:, State.psidot],
-                "vx_mps": states[:, State.vx],
-                "vy_mps": states[:, State.vy],
-                "x_m": x_k,
-                "y_m": y_k,
-                "fyf_n": inputs[:, 0],
-                "fxf_n": inputs[:, 1],
-                "fxr_n": inputs[:, 2],
-                "fyr_n": np.asarray(plan.rear_lateral_force_n),
-                "fzf_n": np.asarray(plan.normal_load_front_n),
-                "fzr_n": np.asarray(plan.normal_load_rear_n),
-                "limit_front_n": np.asarray(plan.force_limit_front_n),
-                "limit_rear_n": np.asarray(plan.force_limit_rear_n),
-                "mu_hat": np.asarray(plan.mu_hat),
-                "mu_true": self.world.friction(s_k),
-            },
-        )
-        fused = getattr(estimate, "fused", None)
-        n_grid = grid_abs.size
-        nan = np.full(n_grid, np.nan)
-        data_mu, data_margin = _data_on_grid(estimate, self.estimate_grid_m)
-        log.append_block(
-            "estimates",
-            {
-                "step": np.full(n_grid, step),
-                "t_s": np.full(n_grid, t),
-                "s_ahead_m": self.estimate_grid_m,
-                "s_m": grid_abs,
-                "mu_true": self.world.friction(grid_abs),
-                "mu_hat": np.asarray(estimate.mu_hat, dtype=float),
-                "mean": nan if fused is None else np.asarray(fused.mean),
-                "std": nan if fused is None else np.asarray(fused.std),
-                "lower": nan if fused is None else np.asarray(fused.lower),
-                "data_mu": data_mu,
-                "data_margin": data_margin,
-            },
-        )
-
-    def _log_tick(
-        self,
-        log: RunLog,
-        t: float,
-        x_plant: np.ndarray,
-        xf: np.ndarray,
-        command: ActuatorCommand,
-        local_available: bool,
-        last: PlantOutput | None,
-    ) -> bool:
-        pose = self.world.pose(x_plant)
-        status = self.world.footprint_status(pose, t, float(xf[State.s]), self.params)
-        log.append(
-            "timeseries",
-            {
-                "t_s": t,
-                "x_m": pose[0],
-                "y_m": pose[1],
-                "psi_rad": pose[2],
-                "vx_mps": float(xf[State.vx]),
-                "vy_mps": float(xf[State.vy]),
-                "psidot_radps": float(xf[State.psidot]),
-                "speed_mps": float(np.hypot(xf[State.vx], xf[State.vy])),
-                "s_m": float(xf[State.s]),
-                "d_m": float(xf[State.d]),
-                "dpsi_rad": float(xf[State.dpsi]),
-                "steer_rad": float(x_plant[PlantState.STEER]),
-                "steer_cmd_rad": command.steer_rad,
-                "torque_front_nm": command.torque_front_nm,
-                "torque_rear_nm": command.torque_rear_nm,
-                "util_front": np.nan if last is None else float(last.utilization_front),
-                "util_rear": np.nan if last is None else float(last.utilization_rear),
-                "mu_front": status.mu_front,
-                "mu_rear": status.mu_rear,
-                "local_available": local_available,
-                "obstacle_active": status.obstacle_active,
-                "clearance_m": status.clearance_m,
-                "in_collision": status.in_collision,
-                "passed_obstacle": status.passed_obstacle,
-                "left_lane": status.left_lane,
-                "in_opposing_lane": status.in_opposing_lane,
-            },
-        )
-        return status.in_collision
-
-
-def _data_on_grid(estimate: Any, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Fusion input data (value, margin) placed on the estimate grid, NaN where there is none."""
-    data_mu = np.full(grid.size, np.nan)
-    data_margin = np.full(grid.size, np.nan)
-    data = getattr(estimate, "data", None)
-    if data is None:
-        return data_mu, data_margin
-    idx = np.clip(np.searchsorted(grid, np.asarray(data.s_m)), 0, grid.size - 1)
-    data_mu[idx] = np.asarray(data.mu)
-    data_margin[idx] = np.asarray(data.margin)
-    return data_mu, data_margin

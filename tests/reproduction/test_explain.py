@@ -2,32 +2,24 @@
 
 from __future__ import annotations
 
-import numpy as np
-
-from mufusion.plots.explain import explain_differences
+from factories import estimate_grid, run_meta, tick
+from mufusion.reproduction import explain_differences
 from mufusion.sim.log import RunLog
+from mufusion.sim.records import VehicleGeometry
 
 
 def _saved_run(tmp_path, name: str, mu_hat: float, mu_true: float, width_m: float = 2.6):
-    log = RunLog(meta={
-        "vehicle": {"name": "truck", "width_m": width_m},
-        "lane_width_m": 3.5,
-        "comparison_time_s": 0.0,
-        "obstacles": [],
-    })
-    grid = np.arange(0.0, 51.0)
-    for t in (0.0, 0.1):
-        log.append_block("estimates", {
-            "step": np.full(grid.size, round(t * 10)), "t_s": np.full(grid.size, t),
-            "s_ahead_m": grid, "mu_hat": np.full(grid.size, mu_hat),
-            "mu_true": np.full(grid.size, mu_true),
-        })
-    log.append("timeseries", {"t_s": 0.0, "d_m": 0.0})
+    vehicle = VehicleGeometry(name="truck", length_m=6.28, width_m=width_m, wheelbase_m=3.4,
+                              cog_to_front_axle_m=1.2, cog_to_rear_axle_m=2.2)
+    log = RunLog(run_meta(vehicle=vehicle))
+    for step, t in enumerate((0.0, 0.1)):
+        log.append(estimate_grid(step, t, mu_hat, mu_true))
+    log.append(tick())
     return str(log.save(tmp_path / name))
 
 
 def _run(config: str, log: str, left_lane: bool, **extra) -> dict:
-    return {"scenario": "turn", "variant": "paper", "config": config, "log": log,
+    return {"scenario": "turn", "variant": "turn-paper", "config": config, "log": log,
             "left_lane": left_lane, "entered_opposing_lane": left_lane,
             "max_abs_lateral_offset_m": 0.37, "max_force_excess": 0.24, **extra}
 
@@ -39,8 +31,8 @@ def test_turn_f_leaving_its_lane_is_explained_from_the_estimate_it_used(tmp_path
         _run("GT", _saved_run(tmp_path, "gt", 0.4, 0.4), False),
     ]
     texts = explain_differences(runs)
-    assert set(texts) == {"turn/paper/F/stays in lane"}
-    text = texts["turn/paper/F/stays in lane"]
+    assert set(texts) == {"turn-paper/F/stays in lane"}
+    text = texts["turn-paper/F/stays in lane"]
     assert "0.447" in text and "+11.7%" in text
     assert "F-safe" in text and "stayed in" in text
     assert "0.45 m of lane" in text
@@ -48,7 +40,7 @@ def test_turn_f_leaving_its_lane_is_explained_from_the_estimate_it_used(tmp_path
 
 def test_a_different_log_gives_a_different_text_and_agreement_gives_none(tmp_path):
     other = [_run("F", _saved_run(tmp_path, "f2", 0.43, 0.4), True)]
-    text = explain_differences(other)["turn/paper/F/stays in lane"]
+    text = explain_differences(other)["turn-paper/F/stays in lane"]
     assert "0.430" in text and "+7.5%" in text and "F-safe" not in text
     agreeing = [_run("F", _saved_run(tmp_path, "f3", 0.4, 0.4), False)]
     assert explain_differences(agreeing) == {}

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
 
-from mufusion.plots import compare_with_paper, write_report
-from mufusion.plots.report import AGREES, DIFFERS, NO_DATA, markdown_to_html
+from mufusion.reproduction import compare_with_paper, markdown_to_html, write_report
+from mufusion.reproduction.verdicts import Outcome
+
+AGREES, DIFFERS, NO_DATA = Outcome.AGREES, Outcome.DIFFERS, Outcome.NO_DATA
 
 _BASE = {
     "collision": False, "impact_speed_mps": None, "min_clearance_m": None,
@@ -18,12 +21,17 @@ _BASE = {
 }
 
 
+_KEYS = {("turn", "paper"): "turn-paper", ("popup", "paper mu=1.0"): "popup-paper",
+         ("popup", "authors mu=0.89"): "popup-authors", ("popup", "car"): "popup-car"}
+
+
 def _run(scenario: str, variant: str, config: str, **metrics) -> dict:
-    return {"scenario": scenario, "variant": variant, "config": config, **_BASE, **metrics}
+    key = _KEYS[(scenario, variant)]
+    return {"scenario": scenario, "variant": key, "config": config, **_BASE, **metrics}
 
 
 def _verdicts(run: dict) -> dict[str, str]:
-    return {v.criterion: v.verdict for v in compare_with_paper(run)}
+    return {v.criterion: v.outcome for v in compare_with_paper(run)}
 
 
 def test_popup_verdicts_follow_the_paper() -> None:
@@ -64,7 +72,7 @@ def test_turn_verdicts_and_car_variant() -> None:
     assert set(_verdicts(_run("popup", "car", "F", min_clearance_m=3.0))) == {"collision"}
     assert compare_with_paper(_run("popup", "paper mu=1.0", "F-safe")) == []
     with pytest.raises(ValueError, match="'config'"):
-        compare_with_paper({"scenario": "turn", "variant": "paper"})
+        compare_with_paper({"scenario": "turn", "variant": "turn-paper"})
 
 
 def _figure(path: Path) -> Path:
@@ -83,10 +91,10 @@ def test_report_lists_every_run_and_explains_differences(tmp_path: Path) -> None
     ]
     figures = {
         "turn-paper/snapshots": _figure(tmp_path / "figures" / "turn-paper-snapshots.png"),
-        "popup-paper-mu-1-0/forces": _figure(tmp_path / "figures" / "popup-forces.png"),
+        "popup-paper/forces": _figure(tmp_path / "figures" / "popup-forces.png"),
         "extra": _figure(tmp_path / "figures" / "extra.png"),
     }
-    key = "popup/paper mu=1.0/P/collision"
+    key = "popup-paper/P/collision"
     md_path, html_path = write_report(
         {"runs": runs, "elapsed_s": 42.0}, tmp_path, figures,
         explanations={key: "Our P plan finds a narrow gap the paper's solver missed."},
@@ -104,7 +112,7 @@ def test_report_lists_every_run_and_explains_differences(tmp_path: Path) -> None
     assert "(figures/popup-forces.png)" in md and "(figures/extra.png)" in md
     html = html_path.read_text()
     assert html.startswith("<!DOCTYPE html>")
-    assert '<img src="figures/turn-paper-snapshots.png"' in html
+    assert 'src="figures/turn-paper-snapshots.png"' in html
     assert html.count("<table>") == md.count("\n|---|")
     assert "<td>differs</td>" in html
 
@@ -125,10 +133,12 @@ def test_report_rejects_bad_input(tmp_path: Path) -> None:
                      {"x": tmp_path / "missing.png"})
     with pytest.raises(ValueError, match="'variant'"):
         write_report({"runs": [{"scenario": "turn", "config": "F"}]}, tmp_path, {})
+    with pytest.raises(ValueError, match="unknown variants"):
+        write_report({"runs": [{"variant": "paper mu=1.0", "config": "F"}]}, tmp_path, {})
 
 
-def test_markdown_converter_escapes_and_formats() -> None:
-    html = markdown_to_html("# A <b>\n\nx **y** `z`\n\n| a | b |\n|---|---|\n| 1 \\| 2 | 3 |\n")
-    assert "<h1>A &lt;b&gt;</h1>" in html
+def test_markdown_converter_formats_tables_and_spans() -> None:
+    html = markdown_to_html("# A & B\n\nx **y** `z`\n\n| a | b |\n|---|---|\n| 1 \\| 2 | 3 |\n")
+    assert "<h1>A &amp; B</h1>" in html
     assert "<p>x <strong>y</strong> <code>z</code></p>" in html
-    assert "<td>1 | 2</td><td>3</td>" in html
+    assert re.search(r"<td>1 \| 2</td>\s*<td>3</td>", html)

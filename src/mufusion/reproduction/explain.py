@@ -14,8 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from mufusion.planner import PlannerConfig
-from mufusion.plots.report import Verdict, compare_with_paper
+from mufusion.configurations import Configuration
+from mufusion.reproduction.variants import Criterion
+from mufusion.reproduction.verdicts import Outcome, Verdict, compare_with_paper
 from mufusion.sim.log import RunLog, load_run
 
 
@@ -25,8 +26,8 @@ def explain_differences(runs: Iterable[Mapping[str, Any]]) -> dict[str, str]:
     Parameters
     ----------
     runs
-        The ``runs`` of a reproduction summary: ``scenario``, ``variant``, ``config``, ``log``
-        (directory of the saved run log) and the run's metrics.
+        The ``runs`` of a reproduction summary: ``variant``, ``config``, ``log`` (directory of
+        the saved run log) and the run's metrics.
 
     Returns
     -------
@@ -34,11 +35,11 @@ def explain_differences(runs: Iterable[Mapping[str, Any]]) -> dict[str, str]:
         ``Verdict.key`` → text, for the differing criteria this module knows how to explain.
     """
     runs = list(runs)
-    by_key = {(r["scenario"], r["variant"], r["config"]): r for r in runs}
+    by_key = {(r["variant"], r["config"]): r for r in runs}
     texts: dict[str, str] = {}
     for run in runs:
         for verdict in compare_with_paper(run):
-            if verdict.verdict != "differs":
+            if verdict.outcome is not Outcome.DIFFERS:
                 continue
             text = _explain(verdict, run, by_key)
             if text:
@@ -50,26 +51,27 @@ def _explain(verdict: Verdict, run: Mapping[str, Any], by_key: Mapping) -> str |
     log = _load(run)
     if log is None:
         return None
-    if verdict.criterion in ("stays in lane", "opposing lane"):
+    criterion = verdict.fact.criterion
+    if criterion in (Criterion.STAYS_IN_LANE, Criterion.OPPOSING_LANE):
         return _lane_text(verdict, run, log, by_key)
-    if verdict.criterion == "collision" and verdict.config == "P":
+    if criterion is Criterion.COLLISION and verdict.config is Configuration.P:
         return _evasion_text(run, log)
-    if verdict.criterion == "clearance":
+    if criterion is Criterion.CLEARANCE:
         return _clearance_text(log)
     return None
 
 
 def _clearance_text(log: RunLog) -> str | None:
     ts = log.timeseries
-    obstacles = log.meta.get("obstacles") or []
+    obstacles = log.meta.obstacles
     near = ts[ts["obstacle_active"].astype(bool) & ~ts["passed_obstacle"].astype(bool)]
     if not obstacles or near.empty or not np.isfinite(near["clearance_m"]).any():
         return None
     row = near.loc[near["clearance_m"].idxmin()]
     ob = obstacles[0]
-    half_w = 0.5 * float(log.meta["vehicle"]["width_m"])
-    margin = PlannerConfig().obstacle_margin_m
-    wanted = float(ob["d_m"]) + 0.5 * float(ob["width_m"]) + half_w + margin
+    half_w = 0.5 * log.meta.vehicle.width_m
+    margin = log.meta.planner.obstacle_margin_m
+    wanted = ob.d_m + 0.5 * ob.width_m + half_w + margin
     return (
         f"At the closest point (t = {float(row['t_s']):.2f} s, clearance "
         f"{float(row['clearance_m']):.2f} m) the vehicle's centre was {float(row['d_m']):.2f} m "
@@ -91,7 +93,7 @@ def _load(run: Mapping[str, Any]) -> RunLog | None:
 def _estimate_at_comparison(log: RunLog) -> tuple[float, float]:
     """μ̂ and true μ under the vehicle at the planning step nearest the comparison instant."""
     est = log.estimates
-    t_c = float(log.meta.get("comparison_time_s", 0.0))
+    t_c = log.meta.comparison_time_s
     steps = est["t_s"].unique()
     t = steps[np.argmin(np.abs(steps - t_c))]
     rows = est[(est["t_s"] == t)].sort_values("s_ahead_m")
@@ -99,28 +101,27 @@ def _estimate_at_comparison(log: RunLog) -> tuple[float, float]:
 
 
 def _lane_margin_m(log: RunLog) -> float:
-    lane = float(log.meta.get("lane_width_m", log.meta.get("road", {}).get("lane_width_m", 3.5)))
-    return 0.5 * (lane - float(log.meta["vehicle"]["width_m"]))
+    return 0.5 * (log.meta.road.lane_width_m - log.meta.vehicle.width_m)
 
 
 def _lane_text(verdict: Verdict, run, log: RunLog, by_key) -> str:
     mu_hat, mu_true = _estimate_at_comparison(log)
     margin = _lane_margin_m(log)
     offset = float(run.get("max_abs_lateral_offset_m") or 0.0)
-    vehicle = log.meta["vehicle"]["name"]
-    if verdict.criterion == "stays in lane":
+    vehicle = log.meta.vehicle.name
+    if verdict.fact.criterion is Criterion.STAYS_IN_LANE:
         text = (
             f"The planner used μ̂ = {mu_hat:.3f} under the vehicle against a true μ = "
             f"{mu_true:.2f} ({mu_hat / mu_true - 1.0:+.1%}); its largest planned front force "
             f"exceeded the true limit by {float(run.get('max_force_excess') or 0.0):.0%}. "
         )
-        if verdict.config == "F" and mu_hat > mu_true:
+        if verdict.config is Configuration.F and mu_hat > mu_true:
             text += (
                 "With worst-case over-estimating inputs the paper's fusion counts the camera's "
                 "copies of one class estimate as independent measurements, so its 'conservative' "
                 "lower bound lies above the true friction (docs/fusion.md). "
             )
-            safe = by_key.get((run["scenario"], run["variant"], "F-safe"))
+            safe = by_key.get((run["variant"], Configuration.F_SAFE.value))
             safe_log = _load(safe) if safe else None
             if safe_log is not None:
                 safe_mu, _ = _estimate_at_comparison(safe_log)
@@ -142,18 +143,18 @@ def _lane_text(verdict: Verdict, run, log: RunLog, by_key) -> str:
 
 
 def _evasion_text(run, log: RunLog) -> str | None:
-    obstacles = log.meta.get("obstacles") or []
+    obstacles = log.meta.obstacles
     if not obstacles:
         return None
-    width = float(log.meta["vehicle"]["width_m"])
-    ob_width = float(obstacles[0].get("width_m", 1.0))
+    width = log.meta.vehicle.width_m
+    ob_width = obstacles[0].width_m
     need = 0.5 * (width + ob_width)
     mu_hat, mu_true = _estimate_at_comparison(log)
     clearance = run.get("min_clearance_m")
     passed = f"passed it with {clearance:.2f} m clearance" if clearance is not None else "passed"
     return (
         f"P planned with μ̂ = {mu_hat:.2f} against μ = {mu_true:.2f} as in the paper, but the "
-        f"{log.meta['vehicle']['name']} ({width:.2f} m wide) has to move only {need:.2f} m "
+        f"{log.meta.vehicle.name} ({width:.2f} m wide) has to move only {need:.2f} m "
         f"sideways to clear the {ob_width:.1f} m obstacle and {passed}: P's force budget "
         f"({_budget(run)} GT's) still suffices for a vehicle this narrow, so the paper's "
         "collision is an outcome for its truck, not for P on every vehicle."

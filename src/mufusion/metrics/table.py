@@ -1,0 +1,57 @@
+"""The outcome table's columns, defined once for the CLI's summary and the reports."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Literal
+
+CellFormat = Literal["text", "yes/no", "number", "percent", "cm"]
+
+
+@dataclass(frozen=True)
+class TableColumn:
+    """One column: the summary key it shows, a short header and how to format it."""
+
+    key: str
+    header: str
+    format: CellFormat = "number"
+
+
+TABLE_COLUMNS: tuple[TableColumn, ...] = (
+    TableColumn("scenario", "scenario", "text"),
+    TableColumn("variant", "variant", "text"),
+    TableColumn("config", "cfg", "text"),
+    TableColumn("collision", "crash", "yes/no"),
+    TableColumn("impact_speed_mps", "impact m/s"),
+    TableColumn("min_clearance_m", "clear m"),
+    TableColumn("max_abs_lateral_offset_m", "max |d| m"),
+    TableColumn("left_lane", "left lane", "yes/no"),
+    TableColumn("entered_opposing_lane", "opp. lane", "yes/no"),
+    TableColumn("utilization_vs_gt", "util vs GT %", "percent"),
+    TableColumn("max_force_excess", "F excess %", "percent"),
+    TableColumn("fallbacks", "fallbacks", "number"),
+)
+"""Columns of the outcome table (summary.json has the full names and every metric)."""
+
+
+def format_cell(value: Any, column: TableColumn) -> str:
+    """A summary value as table text: — for none, yes/no, signed percent, centimetres, 3 digits.
+
+    Examples
+    --------
+    >>> format_cell(-0.326, TableColumn("utilization_vs_gt", "util", "percent"))
+    '-32.6'
+    >>> format_cell(0.1234, TableColumn("max_lane_excursion_m", "exc", "cm"))
+    '12.3'
+    """
+    if value is None:
+        return "–"
+    if column.format == "yes/no" or isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, int | float) and column.format == "percent":
+        return f"{100 * value:+.1f}"
+    if isinstance(value, int | float) and column.format == "cm":
+        return f"{100 * value:.1f}"
+    if isinstance(value, float):
+        return f"{value:.3g}"
+    return str(value)

@@ -1,0 +1,23 @@
+"""The runs behind ``mufusion reproduce``: every variant with every configuration."""
+
+from __future__ import annotations
+
+from mufusion.configurations import Configuration
+from mufusion.reproduction.variants import VARIANTS
+from mufusion.scenarios.campaign import RunSpec
+
+
+def reproduction_specs(include_car: bool = True) -> list[RunSpec]:
+    """One run per variant and configuration (truck variants first; the car ones optional).
+
+    Examples
+    --------
+    >>> len(reproduction_specs(include_car=False))
+    15
+    """
+    return [
+        RunSpec(scenario=v.scenario, config=c.value, variant=v.key, overrides=v.overrides)
+        for v in VARIANTS
+        if include_car or v.paper_vehicle
+        for c in Configuration
+    ]

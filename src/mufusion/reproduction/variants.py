@@ -1,0 +1,184 @@
+"""The paper's experiments as data: the scenario variants we run and what the paper reports.
+
+Each :class:`Variant` is one scenario set-up (its overrides of a built-in scenario) run with every
+configuration; :data:`PAPER_FACTS` holds the outcomes Svensson & Törngren report (Sec. IV, Fig. 3
+and 4) as typed expectations. The verdicts (:mod:`mufusion.reproduction.verdicts`), the report and
+the figures read these objects; nothing matches variant names as text.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+from mufusion.configurations import Configuration
+
+C = Configuration
+
+
+class Criterion(str, Enum):
+    """A reported outcome of the paper, checked against a run's metrics."""
+
+    STAYS_IN_LANE = "stays in lane"
+    OPPOSING_LANE = "opposing lane"
+    COLLISION = "collision"
+    IMPACT_SPEED = "impact speed"
+    CLEARANCE = "clearance"
+    UTILIZATION = "utilisation vs GT"
+
+
+@dataclass(frozen=True)
+class FlagFact:
+    """A yes/no outcome: ``metric`` (a boolean metric) should be ``expected``."""
+
+    criterion: Criterion
+    metric: str
+    expected: bool
+    paper: str
+
+
+@dataclass(frozen=True)
+class NumberFact:
+    """A number the paper reports: ``metric`` should lie within ``tolerance`` of ``target``."""
+
+    criterion: Criterion
+    metric: str
+    target: float
+    tolerance: float
+    unit: str
+    paper: str
+    as_percent: bool = False
+
+
+Fact = FlagFact | NumberFact
+
+# Tolerances of the numeric comparisons: the paper gives approximate values ("~17.5 m/s",
+# "~0.5 m"); utilisation to 0.1 %, compared within 5 percentage points.
+IMPACT_SPEED_TOLERANCE_MPS = 2.5
+CLEARANCE_TOLERANCE_M = 0.3
+UTILIZATION_TOLERANCE = 0.05
+PAPER_IMPACT_SPEED_MPS = 17.5
+PAPER_CLEARANCE_M = 0.5
+
+
+_STAYS = FlagFact(Criterion.STAYS_IN_LANE, "left_lane", False, "stays in its lane")
+_TURN_FACTS: dict[Configuration, tuple[Fact, ...]] = {
+    C.GT: (_STAYS,),
+    C.L: (FlagFact(Criterion.OPPOSING_LANE, "entered_opposing_lane", True,
+                   "leaves its lane into the opposing lane"),),
+    C.P: (_STAYS,),
+    C.F: (_STAYS,),
+}
+_PASS = FlagFact(Criterion.COLLISION, "collision", False, "passes, no collision")
+_CLEARANCE = NumberFact(Criterion.CLEARANCE, "min_clearance_m", PAPER_CLEARANCE_M,
+                        CLEARANCE_TOLERANCE_M, "m", f"≈ {PAPER_CLEARANCE_M} m")
+_POPUP_FACTS: dict[Configuration, tuple[Fact, ...]] = {
+    C.GT: (_PASS, _CLEARANCE),
+    C.L: (_PASS, _CLEARANCE),
+    C.P: (FlagFact(Criterion.COLLISION, "collision", True, "collides"),
+          NumberFact(Criterion.IMPACT_SPEED, "impact_speed_mps", PAPER_IMPACT_SPEED_MPS,
+                     IMPACT_SPEED_TOLERANCE_MPS, "m/s", f"≈ {PAPER_IMPACT_SPEED_MPS} m/s")),
+    C.F: (_PASS, _CLEARANCE),
+}
+PAPER_FACTS: dict[str, dict[Configuration, tuple[Fact, ...]]] = {
+    "turn": _TURN_FACTS,
+    "popup": _POPUP_FACTS,
+}
+"""Per scenario kind and configuration, the outcomes the paper reports (Sec. IV-C, IV-D)."""
+
+
+def utilization_facts(p: float, f: float) -> dict[Configuration, NumberFact]:
+    """Planned front-force utilisation relative to GT at the comparison instant (Fig. 4k)."""
+    return {
+        config: NumberFact(Criterion.UTILIZATION, "utilization_vs_gt", target,
+                           UTILIZATION_TOLERANCE, "", f"{100 * target:+.1f} %", as_percent=True)
+        for config, target in ((C.P, p), (C.F, f))
+    }
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One scenario set-up of the reproduction, run with every configuration.
+
+    Attributes
+    ----------
+    key
+        Identifier used in run names, summary rows and figure names (``"popup-authors"``).
+    scenario
+        Built-in scenario it modifies (``"turn"`` or ``"popup"``).
+    title
+        Heading in the report.
+    overrides
+        ``dotted.key=value`` overrides of the scenario file.
+    paper_vehicle
+        Whether it runs the paper's vehicle (the truck): then the paper's numbers apply,
+        otherwise only its yes/no outcomes are checked.
+    utilization
+        The paper's utilisation against GT for this set-up, or empty.
+    snapshot_positions_m
+        Progress from the start [m] of the top-view snapshots (paper Fig. 3a-h: 0, 15, 30, 55 m;
+        Fig. 4a-h: 0, 2, 18, 40 m).
+    contrast
+        The configuration shown above F in the snapshots (the one that fails in the paper).
+    animate
+        Whether the reproduction writes GIFs of this variant.
+    """
+
+    key: str
+    scenario: str
+    title: str
+    overrides: tuple[str, ...] = ()
+    paper_vehicle: bool = True
+    utilization: dict[Configuration, NumberFact] = field(default_factory=dict)
+    snapshot_positions_m: tuple[float, ...] = (0.0,)
+    contrast: Configuration = C.P
+    animate: bool = False
+
+    def facts(self, configuration: Configuration) -> tuple[Fact, ...]:
+        """The paper's outcomes for ``configuration`` in this variant (none for F-safe)."""
+        facts = PAPER_FACTS[self.scenario].get(configuration, ())
+        if not self.paper_vehicle:
+            facts = tuple(f for f in facts if isinstance(f, FlagFact))
+        extra = self.utilization.get(configuration)
+        return (*facts, extra) if extra is not None else facts
+
+
+TURN_SNAPSHOTS_M = (0.0, 15.0, 30.0, 55.0)
+POPUP_SNAPSHOTS_M = (0.0, 2.0, 18.0, 40.0)
+
+VARIANTS: tuple[Variant, ...] = (
+    Variant("turn-paper", "turn", "turn, paper settings", (), True, {}, TURN_SNAPSHOTS_M, C.L,
+            animate=True),
+    # At μ = 1.0 the paper's rules give P 1 − 0.6/1.0 = −40 % and F ≈ −5 %.
+    Variant("popup-paper", "popup", "pop-up, paper settings (μ = 1.0)", (), True,
+            utilization_facts(-0.40, -0.05), POPUP_SNAPSHOTS_M, C.P, animate=True),
+    # The authors' configuration (μ = 0.89): P −32.6 %, F −5.6 % exactly (Sec. IV-D).
+    Variant("popup-authors", "popup", "pop-up, the authors' μ = 0.89", ("friction.mu=0.89",),
+            True, utilization_facts(-0.326, -0.056), POPUP_SNAPSHOTS_M, C.P),
+    Variant("turn-car", "turn", "turn, passenger car", ("vehicle=car",), False, {},
+            TURN_SNAPSHOTS_M, C.L),
+    Variant("popup-car", "popup", "pop-up, passenger car", ("vehicle=car",), False, {},
+            POPUP_SNAPSHOTS_M, C.P),
+)
+"""The reproduction's variants, truck first; ``mufusion reproduce --no-car`` drops the car ones."""
+
+VARIANTS_BY_KEY: dict[str, Variant] = {v.key: v for v in VARIANTS}
+
+
+def variant(key: str) -> Variant:
+    """The variant with ``key``.
+
+    Raises
+    ------
+    ValueError
+        If no variant has that key (the message lists the keys).
+    """
+    try:
+        return VARIANTS_BY_KEY[key]
+    except KeyError:
+        raise ValueError(f"variant must be one of {list(VARIANTS_BY_KEY)}, got {key!r}") from None
+
+
+def default_variant(scenario: str) -> Variant:
+    """The paper-settings variant of a scenario kind (figures of a single run use its layout)."""
+    return next(v for v in VARIANTS if v.scenario == scenario and not v.overrides)

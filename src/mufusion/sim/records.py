@@ -1,0 +1,274 @@
+"""The run log's schema: one typed record per table, one model for the run's metadata.
+
+Every column of a saved run is a field below (units in the names); the recorder writes these
+records, :func:`mufusion.sim.log.load_run` checks a saved run against them, and metrics, figures
+and the report read the tables by these names. Nothing else spells out a column.
+
+Tables (one record type each):
+
+``timeseries`` — :class:`Tick`
+    one row per controller tick: plant state (Cartesian and Frenet), actuator command, tire
+    utilisation per axle, true friction per axle, footprint status.
+``planning_steps`` — :class:`PlanningStep`
+    one row per planning step: mode, solver status, fallback, local estimate.
+``plans`` — :class:`PlanStages`
+    one block per planning step, one row per stage: planned state and tire forces, the limits.
+``estimates`` — :class:`EstimateGrid`
+    one block per planning step, one row per grid point ahead: true μ, μ̂, the GP posterior.
+``timing`` — :class:`StepTiming`
+    wall-clock times; the only part of a run that is not a deterministic function of its inputs.
+``events`` — :class:`Event`
+    injected faults, the system's reactions and mode changes, one row each.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+import numpy.typing as npt
+from pydantic import BaseModel, ConfigDict
+
+from mufusion.configurations import Configuration
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Tick:
+    """One controller tick (table ``timeseries``)."""
+
+    table: ClassVar[str] = "timeseries"
+
+    t_s: float
+    x_m: float
+    y_m: float
+    psi_rad: float
+    vx_mps: float
+    vy_mps: float
+    psidot_radps: float
+    speed_mps: float
+    s_m: float
+    d_m: float
+    dpsi_rad: float
+    body_slip_rad: float
+    steer_rad: float
+    steer_cmd_rad: float
+    torque_front_nm: float
+    torque_rear_nm: float
+    util_front: float
+    util_rear: float
+    mu_front: float
+    mu_rear: float
+    local_available: bool
+    control_mode: str
+    obstacle_active: bool
+    clearance_m: float
+    in_collision: bool
+    passed_obstacle: bool
+    left_lane: bool
+    in_opposing_lane: bool
+
+
+@dataclass(frozen=True)
+class PlanningStep:
+    """One planning step's outcome (table ``planning_steps``)."""
+
+    table: ClassVar[str] = "planning_steps"
+
+    step: int
+    t_s: float
+    s_m: float
+    mode: str
+    status: int
+    ok: bool
+    fallback: bool
+    sampled_reinit: bool
+    local_available: bool
+    local_mu: float
+
+
+@dataclass(frozen=True)
+class StepTiming:
+    """Wall-clock time of one planning step (table ``timing``)."""
+
+    table: ClassVar[str] = "timing"
+
+    step: int
+    t_s: float
+    solve_ms: float
+    step_ms: float
+
+
+@dataclass(frozen=True)
+class PlanStages:
+    """The stages of one plan (table ``plans``); arrays of one length, scalars repeat."""
+
+    table: ClassVar[str] = "plans"
+
+    step: int
+    t_s: float
+    k: npt.NDArray[np.int64]
+    t_k_s: FloatArray
+    s_m: FloatArray
+    d_m: FloatArray
+    dpsi_rad: FloatArray
+    psidot_radps: FloatArray
+    vx_mps: FloatArray
+    vy_mps: FloatArray
+    x_m: FloatArray
+    y_m: FloatArray
+    fyf_n: FloatArray
+    fxf_n: FloatArray
+    fxr_n: FloatArray
+    fyr_n: FloatArray
+    fzf_n: FloatArray
+    fzr_n: FloatArray
+    limit_front_n: FloatArray
+    limit_rear_n: FloatArray
+    mu_hat: FloatArray
+    mu_true: FloatArray
+
+
+@dataclass(frozen=True)
+class EstimateGrid:
+    """One planning step's friction estimate over the grid ahead (table ``estimates``).
+
+    ``mean``, ``std``, ``lower`` (the GP posterior) and ``data_mu``, ``data_margin`` (the fusion
+    input placed on the grid) are NaN where a configuration has none.
+    """
+
+    table: ClassVar[str] = "estimates"
+
+    step: int
+    t_s: float
+    s_ahead_m: FloatArray
+    s_m: FloatArray
+    mu_true: FloatArray
+    mu_hat: FloatArray
+    mean: FloatArray
+    std: FloatArray
+    lower: FloatArray
+    data_mu: FloatArray
+    data_margin: FloatArray
+
+
+@dataclass(frozen=True)
+class Event:
+    """A fault, the system's reaction to one, or a change of control mode (table ``events``)."""
+
+    table: ClassVar[str] = "events"
+
+    t_s: float
+    kind: str
+    detail: str
+
+
+ROW_RECORDS: tuple[type, ...] = (Tick, PlanningStep, StepTiming, Event)
+BLOCK_RECORDS: tuple[type, ...] = (PlanStages, EstimateGrid)
+RECORD_TYPES: dict[str, type] = {r.table: r for r in (*ROW_RECORDS, *BLOCK_RECORDS)}
+"""Table name → record type, in the order the tables are written."""
+
+
+def columns(record_type: type) -> tuple[str, ...]:
+    """The column names of a record type (its field names, in order)."""
+    return tuple(f.name for f in dataclasses.fields(record_type))
+
+
+# -------------------------------------------------------------------------------------------
+# Metadata
+# -------------------------------------------------------------------------------------------
+
+
+class _Meta(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class VehicleGeometry(_Meta):
+    """What figures and metrics need of the vehicle: its name and footprint."""
+
+    name: str
+    length_m: float
+    width_m: float
+    wheelbase_m: float
+    cog_to_front_axle_m: float
+    cog_to_rear_axle_m: float
+
+
+class RoadTrace(_Meta):
+    """The reference path sampled along s, its lane width and the true friction on the centre."""
+
+    s_m: list[float]
+    x_m: list[float]
+    y_m: list[float]
+    psi_rad: list[float]
+    curvature_1pm: list[float]
+    mu: list[float]
+    lane_width_m: float
+
+
+class ObstacleTrace(_Meta):
+    """An obstacle in road coordinates and its Cartesian corners."""
+
+    s_m: float
+    d_m: float
+    length_m: float
+    width_m: float
+    appear_time_s: float
+    corners_x_m: list[float]
+    corners_y_m: list[float]
+
+
+class PlannerSettings(_Meta):
+    """The planner's settings a figure or verdict needs (the plan's step is ``dt_s``)."""
+
+    horizon_steps: int
+    dt_s: float
+    utilization_factor: float
+    polygon_sides: int
+    obstacle_margin_m: float
+    lane_d_min_m: float
+    lane_d_max_m: float
+    backend: str
+    use_sampling: bool
+
+
+class LoopRatesMeta(_Meta):
+    """Rates of the loop's components [Hz]."""
+
+    plant_hz: float
+    controller_hz: float
+    planner_hz: float
+
+
+class RunMeta(_Meta):
+    """Everything about a run that is not a time series (``meta.json``).
+
+    ``scenario_config`` is the validated scenario as JSON (provenance: the run can be repeated
+    from it); the fields next to it are what metrics, figures and the report read.
+    """
+
+    scenario_name: str
+    configuration: Configuration
+    seed: int
+    scenario_config: dict[str, Any]
+    vehicle: VehicleGeometry
+    road: RoadTrace
+    obstacles: list[ObstacleTrace]
+    planner: PlannerSettings
+    rates: LoopRatesMeta
+    start_s_m: float
+    start_heading_rad: float
+    comparison_time_s: float
+    duration_s: float
+
+    @property
+    def label(self) -> str:
+        """The configuration's legend text."""
+        return self.configuration.label
+
+    @property
+    def lane_width_m(self) -> float:
+        return self.road.lane_width_m
