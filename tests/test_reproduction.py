@@ -21,7 +21,7 @@ def reproduction(tmp_path_factory):
     result = CliRunner().invoke(app, ["reproduce", "--out", str(out), "--no-gif"])
     assert result.exit_code == 0, result.output
     summary = json.loads((out / "summary.json").read_text())
-    runs = {(r["scenario"], r["variant"], r["config"]): r for r in summary["runs"]}
+    runs = {(r["variant"], r["config"]): r for r in summary["runs"]}
     return out, runs
 
 
@@ -29,21 +29,21 @@ def test_turn_local_only_slides_into_the_opposing_lane_and_the_others_keep_their
     reproduction,
 ):
     _, runs = reproduction
-    assert runs[("turn", "paper", "L")]["entered_opposing_lane"]
+    assert runs[("turn-paper", "L")]["entered_opposing_lane"]
     for config in ("GT", "P", "F-safe"):
-        assert not runs[("turn", "paper", config)]["left_lane"], config
+        assert not runs[("turn-paper", config)]["left_lane"], config
     # L planned with the 0.8 it last measured: far more force than μ = 0.4 gives.
-    assert runs[("turn", "paper", "L")]["max_force_excess"] > 0.5
-    assert runs[("turn", "paper", "GT")]["max_force_excess"] == 0.0
+    assert runs[("turn-paper", "L")]["max_force_excess"] > 0.5
+    assert runs[("turn-paper", "GT")]["max_force_excess"] == 0.0
 
 
-@pytest.mark.parametrize("variant", ["paper mu=1.0", "authors mu=0.89"])
+@pytest.mark.parametrize("variant", ["popup-paper", "popup-authors"])
 def test_popup_predictive_only_collides_and_the_others_pass(reproduction, variant):
     _, runs = reproduction
-    p = runs[("popup", variant, "P")]
+    p = runs[(variant, "P")]
     assert p["collision"] and 15.0 <= p["impact_speed_mps"] <= 20.0
     for config in ("GT", "L", "F", "F-safe"):
-        run = runs[("popup", variant, config)]
+        run = runs[(variant, config)]
         assert not run["collision"], config
         assert run["min_clearance_m"] is not None and run["min_clearance_m"] > 0.0, config
         assert run["max_abs_lateral_offset_m"] < 3 * 3.5 / 2, config  # stayed on the road
@@ -52,12 +52,12 @@ def test_popup_predictive_only_collides_and_the_others_pass(reproduction, varian
 def test_popup_planned_force_utilisation_against_ground_truth(reproduction):
     _, runs = reproduction
     # Paper: P −32.6 % (authors' μ = 0.89) / −40 % (μ = 1.0); F within −10 % (paper −5.6 %).
-    assert runs[("popup", "authors mu=0.89", "P")]["utilization_vs_gt"] == pytest.approx(
+    assert runs[("popup-authors", "P")]["utilization_vs_gt"] == pytest.approx(
         -0.326, abs=0.01)
-    assert runs[("popup", "paper mu=1.0", "P")]["utilization_vs_gt"] == pytest.approx(
+    assert runs[("popup-paper", "P")]["utilization_vs_gt"] == pytest.approx(
         -0.40, abs=0.01)
-    for variant in ("paper mu=1.0", "authors mu=0.89"):
-        assert -0.10 <= runs[("popup", variant, "F")]["utilization_vs_gt"] < 0.0
+    for variant in ("popup-paper", "popup-authors"):
+        assert -0.10 <= runs[(variant, "F")]["utilization_vs_gt"] < 0.0
 
 
 def test_report_puts_every_difference_next_to_an_explanation(reproduction):
