@@ -129,7 +129,12 @@ class FrictionConfiguration:
         self.local.reset()
 
     def step(
-        self, s_ahead_m: np.ndarray, mu_true_ahead: np.ndarray, utilization: float
+        self,
+        s_ahead_m: np.ndarray,
+        mu_true_ahead: np.ndarray,
+        utilization: float,
+        *,
+        camera_ok: bool = True,
     ) -> FrictionEstimate:
         """Estimate the friction over the grid ahead for one planning step.
 
@@ -142,6 +147,10 @@ class FrictionConfiguration:
             True μ at those distances [-]; ``mu_true_ahead[0]`` is under the vehicle.
         utilization : float
             Realised tire-force utilization over the last planning interval (its maximum) [-].
+        camera_ok : bool
+            False when the camera delivers nothing usable this step (dropped out, or its values
+            were invalid and discarded): P then assumes the lowest class minimum everywhere,
+            F and F-safe fuse without predictive data.
 
         Returns
         -------
@@ -158,7 +167,7 @@ class FrictionConfiguration:
         if s[0] != 0.0:
             raise ValueError(f"s_ahead_m must start at 0 m (under the vehicle), got {s[0]!r}")
         local = self.local.update(float(mu[0]), utilization)
-        mu_hat, fused, data = self._mu_hat(s, mu, local)
+        mu_hat, fused, data = self._mu_hat(s, mu, local, camera_ok)
         mu_hat = np.clip(np.asarray(mu_hat, dtype=float), MU_HAT_MIN, MU_HAT_MAX)
         if not np.all(np.isfinite(mu_hat)):
             # A NaN would silently remove the friction constraint in the planner: fail loudly.
@@ -173,7 +182,7 @@ class FrictionConfiguration:
         )
 
     def _mu_hat(
-        self, s: np.ndarray, mu: np.ndarray, local: LocalEstimate
+        self, s: np.ndarray, mu: np.ndarray, local: LocalEstimate, camera_ok: bool
     ) -> tuple[np.ndarray, FusedEstimate | None, FusionData | None]:
         raise NotImplementedError
 
@@ -183,7 +192,7 @@ class GroundTruth(FrictionConfiguration):
 
     configuration = Configuration.GT
 
-    def _mu_hat(self, s, mu, local):
+    def _mu_hat(self, s, mu, local, camera_ok):
         return mu.copy(), None, None
 
 
@@ -192,7 +201,7 @@ class LocalOnly(FrictionConfiguration):
 
     configuration = Configuration.L
 
-    def _mu_hat(self, s, mu, local):
+    def _mu_hat(self, s, mu, local, camera_ok):
         # μ̂_l = −max{|e_l|} + (μ_gt(0) + e_l if available else μ̂_0)  (paper Sec. IV-B)
         return np.full(s.shape, local.mu - self.local.max_error), None, None
 
@@ -202,8 +211,11 @@ class PredictiveOnly(FrictionConfiguration):
 
     configuration = Configuration.P
 
-    def _mu_hat(self, s, mu, local):
+    def _mu_hat(self, s, mu, local, camera_ok):
         # Only the class matters to P, so the reported value's error model is irrelevant here.
+        if not camera_ok:
+            # No class seen: the lowest class minimum is all P can assume.
+            return np.full(s.shape, min(c.mu_low for c in self.classes)), None, None
         camera = predictive_estimate(s, mu, classes=self.classes, range_m=self.range_m)
         mu_hat = np.array(camera.mu_low)
         seen = camera.in_range
@@ -239,16 +251,19 @@ class Fused(FrictionConfiguration):
             self._fusion = GPFusion(self.prior, s, mode=self.mode)
         return self._fusion
 
-    def _mu_hat(self, s, mu, local):
+    def _mu_hat(self, s, mu, local, camera_ok):
         camera = predictive_estimate(
             s, mu, classes=self.classes, error=self.predictive_error, rng=self.rng,
             range_m=self.range_m,
         )
         extra = {} if self.s_local_m is None else {"s_local_m": self.s_local_m}
+        # Drawn even without a camera, so that the random errors stay in step with a run
+        # without the fault; NaN marks "no data" to the assembly.
+        camera_mu = camera.mu if camera_ok else np.full(s.shape, np.nan)
         # Paper Sec. III, input data: the local estimate replaces the camera's for s < s_l.
         data = assemble_inputs(
             s,
-            camera.mu,
+            camera_mu,
             camera.margin,
             local_mu=local.mu if local.available else None,
             local_margin=self.local.max_error,

@@ -10,8 +10,10 @@ What happens is written by a :class:`~mufusion.sim.recorder.Recorder` into one
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Literal, Protocol
@@ -20,7 +22,9 @@ import numpy as np
 
 from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan, PlannerObstacle
+from mufusion.sim.faults import Fault, SafetySettings, active_kinds, estimate_delay_s
 from mufusion.sim.log import RunLog
+from mufusion.sim.minimal_risk import minimal_risk_command
 from mufusion.sim.recorder import Recorder
 from mufusion.sim.records import RunMeta
 from mufusion.sim.world import World
@@ -32,6 +36,8 @@ from mufusion.vehicle.plant import PlantOutput, PlantState
 _log = logging.getLogger(__name__)
 
 PlanningMode = Literal["cruise", "evade", "emergency"]
+MINIMAL_RISK_MODE: PlanningMode = "emergency"
+"""The planner's mode during the minimal-risk manoeuvre: stop short, in lane."""
 
 
 @dataclass(frozen=True)
@@ -126,6 +132,15 @@ class PlantModel(Protocol):
     ) -> PlantOutput: ...
 
 
+@dataclass(frozen=True)
+class _Anchored:
+    """A friction estimate and where and when it was made."""
+
+    t_s: float
+    s_m: float
+    estimate: FrictionEstimate
+
+
 @dataclass
 class ClosedLoop:
     """One closed-loop run's state: the clock, the components and the log.
@@ -150,6 +165,26 @@ class ClosedLoop:
         Distances ahead at which friction is estimated [m] (paper: 0, 1, …, 50).
     emergency_on_obstacle
         Switch the planner to its emergency (stop) mode once an obstacle is active.
+    faults
+        Faults to inject (:mod:`mufusion.sim.faults`).
+    safety
+        How the loop reacts to missing, stale or failing parts.
+
+    Notes
+    -----
+    Reactions, each logged as an event (table ``events``):
+
+    - The friction estimate handed to the planner must be finite and at most
+      ``safety.max_estimate_age_s`` old. Otherwise the last estimate that was (re-anchored at
+      the absolute positions it was made for) is used while it is young enough, else
+      ``safety.mu_floor`` over the whole horizon.
+    - A planning step without a usable plan (the solver failed, the planner raised or was made
+      to fail) keeps the previous plan. After ``safety.max_consecutive_fallbacks`` such steps in
+      a row, or at once when the friction source raises, the vehicle enters the minimal-risk
+      manoeuvre: the planner plans a stop in lane (``MINIMAL_RISK_MODE``); while it cannot, the
+      loop brakes in lane itself (:func:`~mufusion.sim.minimal_risk.minimal_risk_command`).
+      The manoeuvre is latched until the end of the run.
+    - Any other exception inside the loop ends the run early with an event; the log is kept.
     """
 
     world: World
@@ -164,6 +199,8 @@ class ClosedLoop:
     meta: RunMeta
     estimate_grid_m: np.ndarray = field(default_factory=lambda: np.arange(0.0, 51.0, 1.0))
     emergency_on_obstacle: bool = False
+    faults: Sequence[Fault] = ()
+    safety: SafetySettings = field(default_factory=SafetySettings)
 
     def run(
         self,
@@ -184,18 +221,33 @@ class ClosedLoop:
         """
         if not np.isfinite(duration_s) or duration_s <= 0:
             raise ValueError(f"duration_s must be > 0, got {duration_s!r}")
+        log = RunLog(self.meta)
+        self._recorder = Recorder(log, self.world, self.params, self.estimate_grid_m)
+        self._history: deque[_Anchored] = deque(maxlen=64)
+        self._last_valid: _Anchored | None = None
+        self._consecutive_fallbacks = 0
+        self._minimal_risk = False
+        self._planner_usable = True
+        for fault in self.faults:
+            self._recorder.event(fault.start_s, "fault_scheduled", _describe(fault))
+        try:
+            self._warm_up(warmup_steps)
+            self._run(duration_s, progress)
+        except Exception as exc:  # never lose the log: end the run, say why
+            _log.exception("closed loop ended by an error")
+            t_end = float(log.timeseries["t_s"].iloc[-1]) if len(log.timeseries) else 0.0
+            self._recorder.event(t_end, "loop_error", f"{type(exc).__name__}: {exc}")
+        return log
+
+    def _run(self, duration_s: float, progress: Callable[[float], None] | None) -> None:
         rates = self.rates
         dt = 1.0 / rates.plant_hz
         n_steps = round(duration_s * rates.plant_hz)
-        log = RunLog(self.meta)
-        recorder = Recorder(log, self.world, self.params, self.estimate_grid_m)
         command = ActuatorCommand(0.0, 0.0, 0.0)
         plan_step = -1
         util_window = 0.0
         last: PlantOutput | None = None
         road_end = self.world.road_length_m - self.params.length_m
-        self._warm_up(warmup_steps)
-
         xf = self.world.frenet_state(self.plant.x)
         s_ego = float(xf[State.s])
         plan: Plan | None = None
@@ -211,29 +263,17 @@ class ClosedLoop:
 
             if i % rates.planner_every == 0:
                 plan_step += 1
-                estimate = self._estimate(s_ego, util_window)
+                estimate, plan = self._planning_step(plan_step, t, xf, util_window, plan)
                 util_window = 0.0
-                obstacles = self.world.planner_obstacles(t, s_ego, behind_m=self.params.length_m)
-                mode = self._mode(obstacles)
-                started = time.perf_counter()
-                plan = self._plan(xf, t, estimate, obstacles, mode)
-                step_ms = 1e3 * (time.perf_counter() - started)
-                if not plan.ok:
-                    _log.warning(
-                        "planning step %d at t=%.2f s: solver status %s", plan_step, t, plan.status
-                    )
-                recorder.planning_step(plan_step, t, s_ego, plan, estimate, mode, step_ms)
                 if progress:
                     progress(t)
 
             if control_tick:
-                assert plan is not None and estimate is not None  # planned at i = 0
-                steer_now = float(x_plant[PlantState.STEER])
-                command = self.controller.command(
-                    t, xf, steer_now, plan, float(self.world.curvature(np.array([s_ego]))[0])
-                ).clipped(self.params)
-                status = recorder.tick(
-                    t, x_plant, xf, command, estimate.local_available, last, "plan"
+                assert estimate is not None  # a planning step comes first (i = 0)
+                command = self._command(t, xf, x_plant, plan, estimate)
+                status = self._recorder.tick(
+                    t, x_plant, xf, command, estimate.local_available, last,
+                    "minimal_risk" if self._minimal_risk else "plan",
                 )
                 if status.in_collision or s_ego >= road_end:
                     break
@@ -241,7 +281,141 @@ class ClosedLoop:
             mu_front, mu_rear = self.world.friction_under_axles(x_plant, self.params)
             last = self.plant.step(command, mu_front, mu_rear)
             util_window = max(util_window, last.utilization_front, last.utilization_rear)
-        return log
+
+    # -- one planning step ------------------------------------------------------------------
+    def _planning_step(
+        self, step: int, t: float, xf: np.ndarray, utilization: float, previous: Plan | None
+    ) -> tuple[FrictionEstimate, Plan | None]:
+        s_ego = float(xf[State.s])
+        kinds = active_kinds(self.faults, t)
+        estimate, source, age = self._usable_estimate(t, s_ego, utilization, kinds)
+        obstacles = self.world.planner_obstacles(t, s_ego, behind_m=self.params.length_m)
+        mode = MINIMAL_RISK_MODE if self._minimal_risk else self._mode(obstacles)
+        started = time.perf_counter()
+        plan: Plan | None = None
+        reason = ""
+        if "solver_failure" in kinds:
+            reason = "injected solver failure"
+        else:
+            try:
+                plan = self._plan(xf, t, s_ego, estimate, obstacles, mode)
+            except Exception as exc:  # a planner that raises degrades, never ends the run
+                reason = f"planner raised {type(exc).__name__}: {exc}"
+                self._recorder.event(t, "planner_error", reason)
+        step_ms = 1e3 * (time.perf_counter() - started)
+        failed = plan is None or plan.fallback
+        self._planner_usable = not failed
+        self._consecutive_fallbacks = self._consecutive_fallbacks + 1 if failed else 0
+        if plan is not None and not plan.ok:
+            _log.warning("planning step %d at t=%.2f s: solver status %s", step, t, plan.status)
+        self._recorder.planning_step(
+            step, t, s_ego, plan, estimate, mode, step_ms, fallback_reason=reason,
+            estimate_source=source, estimate_age_s=age,
+        )
+        if self._consecutive_fallbacks >= self.safety.max_consecutive_fallbacks:
+            self._enter_minimal_risk(t, f"{self._consecutive_fallbacks} planning steps in a row "
+                                        "without a usable plan")
+        return estimate, plan if plan is not None else previous
+
+    def _usable_estimate(
+        self, t: float, s_ego: float, utilization: float, kinds: frozenset[str]
+    ) -> tuple[FrictionEstimate, str, float]:
+        """The estimate the planner gets, where it came from, and its age [s]."""
+        fresh = self._estimate(t, s_ego, utilization, kinds)
+        if fresh is not None:
+            self._history.append(_Anchored(t, s_ego, fresh))
+        candidate, source = (None if fresh is None else _Anchored(t, s_ego, fresh)), "current"
+        delay = estimate_delay_s(self.faults, t)
+        if delay > 0.0 and self._history:
+            older = [a for a in self._history if a.t_s <= t - delay + 1e-9]
+            candidate, source = (older[-1] if older else self._history[0]), "delayed"
+        if candidate is not None and "estimate_nan" in kinds:
+            nan = np.full(np.shape(candidate.estimate.mu_hat), np.nan)
+            candidate = dataclasses.replace(
+                candidate, estimate=dataclasses.replace(candidate.estimate, mu_hat=nan)
+            )
+        max_age = self.safety.max_estimate_age_s
+        if candidate is not None and _finite(candidate) and t - candidate.t_s <= max_age + 1e-9:
+            if source == "current":
+                self._last_valid = candidate
+                return candidate.estimate, source, 0.0
+            return self._on_grid(candidate, s_ego), source, t - candidate.t_s
+        why = "missing" if candidate is None else (
+            "not finite" if not _finite(candidate) else f"{t - candidate.t_s:.2f} s old"
+        )
+        last = self._last_valid
+        if last is not None and t - last.t_s <= max_age + 1e-9:
+            self._recorder.event(t, "estimate_fallback", f"estimate {why}: last valid one used")
+            return self._on_grid(last, s_ego), "last_valid", t - last.t_s
+        self._recorder.event(
+            t, "estimate_fallback", f"estimate {why}: μ = {self.safety.mu_floor} assumed"
+        )
+        floor = np.full(self.estimate_grid_m.size, self.safety.mu_floor)
+        local = fresh if fresh is not None else (last.estimate if last is not None else None)
+        return (
+            FrictionEstimate(
+                s_m=self.estimate_grid_m, mu_hat=floor,
+                local_available=bool(local and local.local_available),
+                local_mu=None if local is None else local.local_mu,
+            ),
+            "floor",
+            np.inf if last is None else t - last.t_s,
+        )
+
+    def _estimate(
+        self, t: float, s_ego: float, utilization: float, kinds: frozenset[str]
+    ) -> FrictionEstimate | None:
+        s_abs = s_ego + self.estimate_grid_m
+        mu_true = self.world.friction(s_abs)
+        util = 0.0 if "local_dropout" in kinds else utilization
+        camera_faults = {"camera_dropout", "camera_nan"} & kinds
+        try:
+            if camera_faults:
+                # The camera's output is unusable (absent or NaN): it is discarded.
+                return self.friction.step(self.estimate_grid_m, mu_true, util, camera_ok=False)
+            return self.friction.step(self.estimate_grid_m, mu_true, util)
+        except Exception as exc:
+            self._recorder.event(t, "friction_source_error", f"{type(exc).__name__}: {exc}")
+            self._enter_minimal_risk(t, "the friction source failed")
+            return None
+
+    def _on_grid(self, anchored: _Anchored, s_ego: float) -> FrictionEstimate:
+        """An older estimate re-sampled on the grid ahead of ``s_ego`` (by absolute s)."""
+        grid_abs = s_ego + self.estimate_grid_m
+        mu_hat = np.interp(grid_abs, anchored.s_m + self.estimate_grid_m,
+                           np.asarray(anchored.estimate.mu_hat, dtype=float))
+        return dataclasses.replace(
+            anchored.estimate, s_m=self.estimate_grid_m, mu_hat=mu_hat, fused=None, data=None
+        )
+
+    def _enter_minimal_risk(self, t: float, why: str) -> None:
+        if not self._minimal_risk:
+            self._minimal_risk = True
+            self._recorder.event(t, "minimal_risk", why)
+
+    def _command(
+        self,
+        t: float,
+        xf: np.ndarray,
+        x_plant: np.ndarray,
+        plan: Plan | None,
+        estimate: FrictionEstimate,
+    ) -> ActuatorCommand:
+        curvature = float(self.world.curvature(np.array([float(xf[State.s])]))[0])
+        if plan is not None and not (self._minimal_risk and not self._planner_usable):
+            try:
+                return self.controller.command(
+                    t, xf, float(x_plant[PlantState.STEER]), plan, curvature
+                ).clipped(self.params)
+            except Exception as exc:
+                self._recorder.event(t, "controller_error", f"{type(exc).__name__}: {exc}")
+                self._enter_minimal_risk(t, "the controller failed")
+        mu_hat = np.asarray(estimate.mu_hat, dtype=float)
+        mu = float(mu_hat[0]) if mu_hat.size and np.isfinite(mu_hat[0]) else self.safety.mu_floor
+        return minimal_risk_command(
+            xf, curvature, self.params, min(max(mu, self.safety.mu_floor), 2.0),
+            self.safety.mrm_utilization,
+        )
 
     def _mode(self, obstacles: Sequence[PlannerObstacle]) -> PlanningMode:
         if not obstacles:
@@ -249,24 +423,25 @@ class ClosedLoop:
         return "emergency" if self.emergency_on_obstacle else "evade"
 
     def _warm_up(self, steps: int) -> None:
+        if steps <= 0:
+            return
         xf = self.world.frenet_state(self.plant.x)
-        estimate = self._estimate(float(xf[State.s]), 0.0)
-        for k in range(steps):
-            self._plan(xf, -(steps - k) / self.rates.planner_hz, estimate, [], "cruise")
-
-    def _estimate(self, s_ego: float, utilization: float) -> FrictionEstimate:
+        s_ego = float(xf[State.s])
         s_abs = s_ego + self.estimate_grid_m
-        return self.friction.step(self.estimate_grid_m, self.world.friction(s_abs), utilization)
+        estimate = self.friction.step(self.estimate_grid_m, self.world.friction(s_abs), 0.0)
+        for k in range(steps):
+            self._plan(xf, -(steps - k) / self.rates.planner_hz, s_ego, estimate, [], "cruise")
 
     def _plan(
         self,
         xf: np.ndarray,
         t: float,
+        s_anchor_m: float,
         estimate: FrictionEstimate,
         obstacles: Sequence[PlannerObstacle],
         mode: PlanningMode,
     ) -> Plan:
-        grid_abs = float(xf[State.s]) + self.estimate_grid_m
+        grid_abs = s_anchor_m + self.estimate_grid_m
         mu_hat_grid = np.asarray(estimate.mu_hat, dtype=float)
 
         def mu_hat_of_s(s: np.ndarray) -> np.ndarray:
@@ -285,3 +460,12 @@ class ClosedLoop:
             lane_d_min_m=self.lane_bounds_m[0],
             lane_d_max_m=self.lane_bounds_m[1],
         )
+
+
+def _finite(anchored: _Anchored) -> bool:
+    return bool(np.all(np.isfinite(np.asarray(anchored.estimate.mu_hat, dtype=float))))
+
+
+def _describe(fault: Fault) -> str:
+    text = f"{fault.kind} from {fault.start_s:g} s for {fault.duration_s:g} s"
+    return text + (f", delay {fault.delay_s:g} s" if fault.delay_s else "")

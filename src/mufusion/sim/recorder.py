@@ -105,30 +105,42 @@ class Recorder:
         step: int,
         t_s: float,
         s_ego_m: float,
-        plan: Plan,
+        plan: Plan | None,
         estimate: FrictionEstimate,
         mode: str,
         step_ms: float,
+        *,
+        fallback_reason: str = "",
+        estimate_source: str = "current",
+        estimate_age_s: float = 0.0,
     ) -> None:
-        """Record one planning step: outcome, timing, the plan's stages and the estimate."""
+        """Record one planning step: outcome, timing, the plan's stages and the estimate.
+
+        ``plan`` is None when the step produced no plan of its own (the planner raised or was
+        made to fail); the loop then keeps the previous plan, which is not logged again.
+        """
+        reason = fallback_reason or ("solver" if plan is not None and plan.fallback else "")
         self.log.append(
             PlanningStep(
                 step=step,
                 t_s=t_s,
                 s_m=s_ego_m,
                 mode=mode,
-                status=int(plan.status),
-                ok=bool(plan.ok),
-                fallback=bool(plan.fallback),
-                sampled_reinit=bool(plan.sampled_reinit),
+                status=-1 if plan is None else int(plan.status),
+                ok=plan is not None and bool(plan.ok),
+                fallback=plan is None or bool(plan.fallback),
+                fallback_reason=reason,
+                sampled_reinit=plan is not None and bool(plan.sampled_reinit),
                 local_available=bool(estimate.local_available),
                 local_mu=finite_or_nan(estimate.local_mu),
+                estimate_source=estimate_source,
+                estimate_age_s=estimate_age_s,
             )
         )
-        self.log.append(
-            StepTiming(step=step, t_s=t_s, solve_ms=1e3 * plan.solve_time_s, step_ms=step_ms)
-        )
-        self._plan(step, t_s, plan)
+        solve_ms = math.nan if plan is None else 1e3 * plan.solve_time_s
+        self.log.append(StepTiming(step=step, t_s=t_s, solve_ms=solve_ms, step_ms=step_ms))
+        if plan is not None:
+            self._plan(step, t_s, plan)
         self._estimate(step, t_s, s_ego_m, estimate)
 
     def event(self, t_s: float, kind: str, detail: str) -> None:

@@ -85,9 +85,13 @@ class PlanningStep:
     status: int
     ok: bool
     fallback: bool
+    fallback_reason: str
     sampled_reinit: bool
     local_available: bool
     local_mu: float
+    estimate_source: str
+    """``current``, ``delayed`` (an injected delay), ``last_valid`` or ``floor``."""
+    estimate_age_s: float
 
 
 @dataclass(frozen=True)
