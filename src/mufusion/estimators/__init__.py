@@ -7,8 +7,11 @@ holds its latest value (:class:`LocalEstimator`, timed by a :class:`LocalTiming`
 """
 
 from mufusion.estimators.classes import (
+    AUTHORS_CLASSES,
+    CLASS_TABLES,
     PAPER_CLASSES,
     SurfaceClass,
+    class_table,
     classify,
     validate_classes,
 )
@@ -33,8 +36,10 @@ from mufusion.estimators.timing import (
 )
 
 __all__ = [
+    "AUTHORS_CLASSES",
     "AUTHORS_LOCAL_TIMING",
     "CAMERA_RANGE_M",
+    "CLASS_TABLES",
     "ERROR_MODELS",
     "LOCAL_MAX_ERROR",
     "LOCAL_TIMINGS",
@@ -48,6 +53,7 @@ __all__ = [
     "PredictiveEstimate",
     "SurfaceClass",
     "check_error_model",
+    "class_table",
     "classify",
     "local_timing",
     "predictive_estimate",
