@@ -131,6 +131,33 @@ def test_authors_sets_against_the_commonroad_car_tire_scaled_by_mu():
     assert rows[0.8][3] == pytest.approx(0.088, abs=1e-3)
 
 
+def test_default_truck_tire_keeps_its_stiffness_so_its_peak_slip_grows_with_mu():
+    # The default model, for contrast: 7 /rad per unit load on every surface, so the peak moves
+    # to larger slip angles as μ grows (the opposite of the authors' sets).
+    fz = 4000.0
+    peaks = {}
+    for mu in (0.4, 0.8):
+        _, fy, _, _ = tire_forces(0.0, ALPHAS, fz, mu, TRUCK.tire)
+        peaks[mu] = _peak(fy)[1]
+        assert float(cornering_stiffness_per_load(mu, TRUCK.tire)) == 7.0
+    assert peaks[0.4] == pytest.approx(0.196, abs=1e-3)
+    assert peaks[0.8] == pytest.approx(0.391, abs=1e-3)
+
+
+@pytest.mark.parametrize(
+    ("mu", "stiffness", "alpha_peak"),
+    [(0.2, 1.6, 0.389), (0.4, 4.0, 0.311), (0.8, 22.08, 0.088), (1.0, 19.0, 0.180)],
+)
+def test_each_authors_set_stiffness_and_peak_slip_angle(mu, stiffness, alpha_peak):
+    fz = 1000.0
+    peak, alpha = _peak(lateral_force_n(ALPHAS, fz, mu, AUTHORS_TIRES))
+    assert peak == pytest.approx(mu * fz, rel=1e-6)
+    assert alpha == pytest.approx(alpha_peak, abs=1e-3)
+    assert float(cornering_stiffness_per_load(mu, TRUCK.tire, AUTHORS_TIRES)) == pytest.approx(
+        stiffness
+    )
+
+
 def test_past_the_peak_the_wet_set_falls_off_far_more_than_snow():
     fz = 1000.0
     snow = lateral_force_n(np.pi / 2, fz, 0.4, AUTHORS_TIRES) / (0.4 * fz)
