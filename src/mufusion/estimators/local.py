@@ -181,13 +181,12 @@ class LocalEstimator:
         # μ̂_l = μ_gt(0) + e_l (paper Sec. IV-B, configuration L); never a negative friction.
         return max(mu_true_here + float(signed_error(self.error, self.max_error, self.rng)), 0.0)
 
-    def _publish(self, mu_true_here: float | None) -> LocalEstimate:
-        available = mu_true_here is not None and any(
-            u > self.utilization_threshold for u in self._samples
-        )
-        if available:
-            self._held = self._measure(mu_true_here)
-        self._last = LocalEstimate(mu=self._held, margin=self.max_error, available=available)
+    def _excited(self) -> bool:
+        return any(u > self.utilization_threshold for u in self._samples)
+
+    def _emit(self, held: float, available: bool) -> LocalEstimate:
+        self._held = held
+        self._last = LocalEstimate(mu=held, margin=self.max_error, available=available)
         return self._last
 
     # -- per planning step, the caller aggregates -------------------------------------------
@@ -225,12 +224,11 @@ class LocalEstimator:
         if self._observed:
             raise ValueError("this estimator is fed by observe(); use update_at(t_s), or reset()")
         self._samples.append(utilization)
-        estimate = self._publish(mu_true_here)
-        if self._held is None:
+        available = self._excited()
+        if available or self._held is None:
             # Not excited at the first update: measure once as if available before the start.
-            self._held = self._measure(mu_true_here)
-            estimate = self._last = LocalEstimate(self._held, self.max_error, available=False)
-        return estimate
+            return self._emit(self._measure(mu_true_here), available)
+        return self._emit(self._held, available)
 
     # -- timed: observations at the plant rate, updates at the planning rate ----------------
     def observe(
@@ -291,9 +289,12 @@ class LocalEstimator:
         self._samples.append(value)
         self._last_sample_s = t_s
 
-    def _publish_at(self, t_s: float) -> LocalEstimate:
+    def _publish_at(self, t_s: float, held: float) -> float:
+        """Publish at ``t_s``; returns the held value afterwards."""
         seen = [o for o in self._observations if o.t_s <= t_s + TIME_TOLERANCE_S]
-        return self._publish(seen[-1].mu if seen else None)
+        if seen and self._excited():
+            return self._emit(self._measure(seen[-1].mu), True).mu
+        return self._emit(held, False).mu
 
     def _prune(self) -> None:
         # Keep what later samples need: everything after the last sample, plus the latest
@@ -332,14 +333,15 @@ class LocalEstimator:
         if target < self._processed_until_s - TIME_TOLERANCE_S:
             raise ValueError(f"t_s must not go back in time: got {t_s!r} after an update at "
                              f"{self._processed_until_s + self.timing.detection_delay_s!r}")
-        if self._held is None:
+        held = self._held
+        if held is None:
             raise ValueError(
                 "update_at needs an observation first (or initial_mu): nothing to report yet"
             )
         timing = self.timing
-        if timing.per_planning_step:
+        if timing.sample_rate_hz is None:
             self._sample_at(target)
-            self._publish_at(target)
+            held = self._publish_at(target, held)
         else:
             sample_period = 1.0 / timing.sample_rate_hz
             publish_period = 1.0 / timing.publish_rate_hz if timing.publish_rate_hz else None
@@ -357,13 +359,13 @@ class LocalEstimator:
                     self._sample_at(t_sample)
                     self._next_sample += 1
                 else:
-                    self._publish_at(t_publish)
+                    held = self._publish_at(t_publish, held)
                     self._next_publish += 1
             if publish_period is None:
-                self._publish_at(target)
+                held = self._publish_at(target, held)
         self._processed_until_s = max(self._processed_until_s, target)
         self._prune()
         if self._last is None:
             # Before the first publish instant: the initial value, not available.
-            self._last = LocalEstimate(mu=self._held, margin=self.max_error, available=False)
+            return self._emit(held, False)
         return self._last
