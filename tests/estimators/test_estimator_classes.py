@@ -9,7 +9,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mufusion.estimators import PAPER_CLASSES, SurfaceClass, classify, validate_classes
+from mufusion.estimators import (
+    AUTHORS_CLASSES,
+    CLASS_TABLES,
+    PAPER_CLASSES,
+    SurfaceClass,
+    class_table,
+    classify,
+    predictive_estimate,
+    validate_classes,
+)
 
 mu_in_table = st.floats(min_value=0.1, max_value=1.5, allow_nan=False)
 
@@ -93,8 +102,8 @@ def test_user_table_gap_is_unclassifiable():
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        (dict(mu_low=0.0, mu_high=0.4, value=0.2, margin=0.2), "0 < mu_low < mu_high"),
-        (dict(mu_low=0.5, mu_high=0.4, value=0.45, margin=0.1), "0 < mu_low < mu_high"),
+        (dict(mu_low=-0.1, mu_high=0.4, value=0.2, margin=0.3), "0 ≤ mu_low < mu_high"),
+        (dict(mu_low=0.5, mu_high=0.4, value=0.45, margin=0.1), "0 ≤ mu_low < mu_high"),
         (dict(mu_low=0.4, mu_high=0.6, value=0.7, margin=0.3), "value must lie in"),
         (dict(mu_low=0.4, mu_high=0.6, value=0.5, margin=0.0), "margin must be > 0"),
         (dict(mu_low=0.4, mu_high=0.6, value=0.5, margin=0.05), "must contain the class"),
@@ -121,3 +130,47 @@ def test_validate_classes_rejects_unsorted_overlapping_duplicate_empty():
         validate_classes((wet, (0.6, 1.0, 0.8, 0.2)))
     with pytest.raises(ValueError, match="sorted by mu_low"):
         classify([0.5], (dry, wet))
+
+
+def _authors_formula(mu):
+    """The authors' get_closest_mu_class: value and conservative value (independent reference)."""
+    value = 0.15 + np.round((np.asarray(mu) - 0.15) / 0.3) * 0.3
+    return value, value - 0.15
+
+
+def test_authors_table_at_the_turn_surface_gives_045_and_p_030():
+    table = class_table("authors")
+    wet = table[int(classify(0.4, table))]
+    assert (wet.name, wet.value, wet.margin, wet.mu_low) == ("wet", pytest.approx(0.45), 0.15,
+                                                            pytest.approx(0.3))
+    est = predictive_estimate([0.0, 10.0], [0.4, 0.8], classes=table)
+    assert est.mu.tolist() == pytest.approx([0.45, 0.75])
+    assert est.mu_low.tolist() == pytest.approx([0.3, 0.6])
+
+
+def test_authors_table_agrees_with_their_rounding_off_the_class_boundaries():
+    mu = np.linspace(0.001, 2.099, 4000)
+    mu = mu[np.min(np.abs(mu[:, None] - np.arange(0.3, 2.1, 0.3)[None, :]), axis=1) > 1e-6]
+    table = AUTHORS_CLASSES
+    idx = classify(mu, table)
+    value, low = _authors_formula(mu)
+    assert np.array([table[i].value for i in idx]) == pytest.approx(value, abs=1e-12)
+    assert np.array([table[i].mu_low for i in idx]) == pytest.approx(low, abs=1e-12)
+    # Above 0.9 the formula goes on in steps of 0.3, and so does the table.
+    assert table[int(classify(1.0, table))].value == pytest.approx(1.05)
+    assert table[int(classify(1.0, table))].mu_low == pytest.approx(0.9)
+    with pytest.raises(ValueError, match="mu must lie in a surface class"):
+        classify(2.2, table)
+
+
+def test_authors_table_boundaries_are_half_open():
+    # Their np.round (half to even) puts 0.3 and 0.9 in the lower class; here they go up.
+    assert classify([0.3, 0.6, 0.9], AUTHORS_CLASSES).tolist() == [1, 2, 3]
+    assert _authors_formula([0.3, 0.6, 0.9])[0].tolist() == pytest.approx([0.15, 0.75, 0.75])
+
+
+def test_class_tables_by_name():
+    assert class_table("paper") == PAPER_CLASSES
+    assert CLASS_TABLES["authors"] is AUTHORS_CLASSES
+    with pytest.raises(ValueError, match="class table must be one of"):
+        class_table("camera")

@@ -42,9 +42,11 @@ from mufusion.estimators import (
     CAMERA_RANGE_M,
     LOCAL_MAX_ERROR,
     PAPER_CLASSES,
+    PAPER_LOCAL_TIMING,
     UTILIZATION_THRESHOLD,
     LocalEstimate,
     LocalEstimator,
+    LocalTiming,
     SurfaceClass,
     check_error_model,
     predictive_estimate,
@@ -287,6 +289,7 @@ def make_configuration(
     max_local_error: float = LOCAL_MAX_ERROR,
     utilization_threshold: float = UTILIZATION_THRESHOLD,
     range_m: float = CAMERA_RANGE_M,
+    local_timing: LocalTiming = PAPER_LOCAL_TIMING,
 ) -> FrictionConfiguration:
     """Build one of the paper's friction-estimation configurations.
 
@@ -314,6 +317,10 @@ def make_configuration(
         Local estimate available iff utilization exceeds this [-] (paper: 0.5).
     range_m : float
         Camera range ``s_f`` [m] (paper: 50).
+    local_timing : LocalTiming
+        Sampling, buffer, axle, publishing and delay of the local estimator; default the paper's
+        (one sample per step, as ``step`` feeds it). Other timings are fed through
+        ``configuration.local.observe`` / ``update_at`` (:mod:`mufusion.estimators.timing`).
 
     Returns
     -------
@@ -347,6 +354,7 @@ def make_configuration(
         error=local_error,
         rng=rng,
         initial_mu=initial_local_mu,
+        timing=local_timing,
     )
     common = dict(
         local=local, classes=table, predictive_error=predictive_error, rng=rng, range_m=range_m

@@ -3,12 +3,15 @@
 The paper (Sec. IV-A) emulates state-of-the-art estimators by their availability, foresight and
 accuracy rather than implementing them; these are those emulations, as pure functions over
 arrays (:func:`predictive_estimate`, :func:`classify`) and one small stateful estimator that
-holds its latest value (:class:`LocalEstimator`).
+holds its latest value (:class:`LocalEstimator`, timed by a :class:`LocalTiming`).
 """
 
 from mufusion.estimators.classes import (
+    AUTHORS_CLASSES,
+    CLASS_TABLES,
     PAPER_CLASSES,
     SurfaceClass,
+    class_table,
     classify,
     validate_classes,
 )
@@ -24,20 +27,35 @@ from mufusion.estimators.predictive import (
     PredictiveEstimate,
     predictive_estimate,
 )
+from mufusion.estimators.timing import (
+    AUTHORS_LOCAL_TIMING,
+    LOCAL_TIMINGS,
+    PAPER_LOCAL_TIMING,
+    LocalTiming,
+    local_timing,
+)
 
 __all__ = [
+    "AUTHORS_CLASSES",
+    "AUTHORS_LOCAL_TIMING",
     "CAMERA_RANGE_M",
+    "CLASS_TABLES",
     "ERROR_MODELS",
     "LOCAL_MAX_ERROR",
+    "LOCAL_TIMINGS",
     "PAPER_CLASSES",
+    "PAPER_LOCAL_TIMING",
     "UTILIZATION_THRESHOLD",
     "ErrorModel",
     "LocalEstimate",
     "LocalEstimator",
+    "LocalTiming",
     "PredictiveEstimate",
     "SurfaceClass",
     "check_error_model",
+    "class_table",
     "classify",
+    "local_timing",
     "predictive_estimate",
     "validate_classes",
 ]

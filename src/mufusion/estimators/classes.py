@@ -29,6 +29,22 @@ The paper gives dry no upper bound, so ``mu_high = inf`` here: any μ ≥ 0.6 is
 admit μ up to 1.5). The dry margin 0.2 covers [0.6, 1.0], the prior's range (paper Sec. III);
 above μ = 1.0 the class value 0.8 under-estimates by more than the margin, which errs on the safe
 side. Below μ = 0.1 no class applies and :func:`classify` raises.
+
+The authors' scheme
+-------------------
+The authors' code (``road_perception.py``, ``get_closest_mu_class`` in their ``tamp_ws``
+repository) rounds instead: class value ``0.15 + round((μ − 0.15)/0.3)·0.3``, conservative value
+(P) that minus 0.15, i.e. classes of width 0.3 centred on 0.15, 0.45, 0.75 with margin 0.15
+(:data:`AUTHORS_CLASSES`). For μ = 0.4 that is 0.45 ± 0.15 and P = 0.30 (the paper's table: 0.5 ±
+0.1 and P = 0.4). Their comment names three classes (snow/ice, wet, dry up to 0.9) and a sanity
+check was meant to warn on any other value, but the check is ineffective (it tests
+``any(values)``), so above 0.9 the formula silently goes on: μ ∈ [0.9, 1.2) gives 1.05 ± 0.15 with
+P = 0.9, and so on. The preset follows the code, not the comment: it continues the rounding in
+steps of 0.3 up to μ = 2.1 (the local estimator admits μ ≤ 2). Their own scenarios (μ = 0.4, 0.5,
+0.8, 0.89) all lie below 0.9, where both readings agree. The snow/ice class starts at 0, so P
+reports 0 there (the configurations clip μ̂ to a small positive value). Exactly at 0.3 and 0.9
+their ``np.round`` (half to even) puts μ in the lower class and at 0.6 in the upper one; here every
+class is half-open ``[low, high)``, so 0.3 and 0.9 go up: three points, none used by a scenario.
 """
 
 from __future__ import annotations
@@ -53,7 +69,7 @@ class SurfaceClass:
     name : str
         Label, e.g. ``"dry"``.
     mu_low : float
-        Lowest μ of the class [-], inclusive; also the conservative value P reports.
+        Lowest μ of the class [-], inclusive, ≥ 0; also the conservative value P reports.
     mu_high : float
         Upper end of the class [-], exclusive (inclusive for the last class of a table);
         ``math.inf`` for an open-ended top class.
@@ -67,7 +83,7 @@ class SurfaceClass:
     Raises
     ------
     ValueError
-        If a bound is not finite (``mu_high`` may be ``inf``), ``0 < mu_low < mu_high`` fails,
+        If a bound is not finite (``mu_high`` may be ``inf``), ``0 ≤ mu_low < mu_high`` fails,
         ``value`` lies outside the class, ``margin`` is not > 0 or does not cover the class.
 
     Examples
@@ -93,9 +109,9 @@ class SurfaceClass:
                 )
         if math.isnan(self.mu_high):
             raise ValueError(f"{where}: mu_high must be a number or inf, got nan")
-        if not 0.0 < self.mu_low < self.mu_high:
+        if not 0.0 <= self.mu_low < self.mu_high:
             raise ValueError(
-                f"{where}: need 0 < mu_low < mu_high, got mu_low={self.mu_low}, "
+                f"{where}: need 0 ≤ mu_low < mu_high, got mu_low={self.mu_low}, "
                 f"mu_high={self.mu_high}"
             )
         if not self.mu_low <= self.value <= self.mu_high:
@@ -123,6 +139,55 @@ PAPER_CLASSES: tuple[SurfaceClass, ...] = (
     SurfaceClass("wet", mu_low=0.4, mu_high=0.6, value=0.5, margin=0.1),
     SurfaceClass("dry", mu_low=0.6, mu_high=math.inf, value=0.8, margin=0.2),
 )
+
+# The authors' code: value 0.15 + round((μ − 0.15)/0.3)·0.3, P = value − 0.15 (module docstring).
+_AUTHORS_WIDTH = 0.3
+AUTHORS_CLASSES: tuple[SurfaceClass, ...] = tuple(
+    SurfaceClass(
+        name,
+        mu_low=round(k * _AUTHORS_WIDTH, 10),
+        mu_high=round((k + 1) * _AUTHORS_WIDTH, 10),
+        value=round((k + 0.5) * _AUTHORS_WIDTH, 10),
+        margin=_AUTHORS_WIDTH / 2.0,
+    )
+    for k, name in enumerate(
+        ("snow/ice", "wet", "dry", "0.9-1.2", "1.2-1.5", "1.5-1.8", "1.8-2.1")
+    )
+)
+
+CLASS_TABLES: dict[str, tuple[SurfaceClass, ...]] = {
+    "paper": PAPER_CLASSES,
+    "authors": AUTHORS_CLASSES,
+}
+
+
+def class_table(name: str) -> tuple[SurfaceClass, ...]:
+    """Return a camera class table by name (validated).
+
+    Parameters
+    ----------
+    name : {"paper", "authors"}
+        ``"paper"``: Table I (:data:`PAPER_CLASSES`); ``"authors"``: the rounding scheme of the
+        authors' code (:data:`AUTHORS_CLASSES`).
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is unknown; the message lists the tables.
+
+    Examples
+    --------
+    >>> wet = class_table("authors")[int(classify(0.4, class_table("authors")))]
+    >>> round(wet.value, 2), wet.margin, wet.mu_low
+    (0.45, 0.15, 0.3)
+    """
+    try:
+        table = CLASS_TABLES[name]
+    except KeyError:
+        raise ValueError(
+            f"class table must be one of {sorted(CLASS_TABLES)}, got {name!r}"
+        ) from None
+    return validate_classes(table)
 
 
 def validate_classes(classes: Sequence[SurfaceClass]) -> tuple[SurfaceClass, ...]:

@@ -26,6 +26,14 @@ left (positive ``F_y``).
 Two implementations share these equations: :func:`tire_forces` (numpy, vectorised; the public one)
 and :func:`tire_forces_scalar` (plain floats, used by the plant's inner loop where numpy's per-call
 overhead dominates). A test checks they agree.
+
+Surface-dependent tires
+-----------------------
+Here the stiffness per unit load is fixed and only the peak scales with μ. The authors' simulator
+switched the Magic Formula coefficients with the surface instead (4 /rad per unit load on snow at
+μ 0.4, 22 /rad on their "wet" set at μ 0.8): :mod:`mufusion.vehicle.surface_tires` holds such
+tables and turns the set at the μ under an axle into :class:`~mufusion.vehicle.params.TireParams`
+for the functions here.
 """
 
 from __future__ import annotations
