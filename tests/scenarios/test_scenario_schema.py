@@ -71,7 +71,7 @@ def test_checks_that_used_to_fail_inside_the_simulation_run_up_front(overrides, 
 def test_a_binary_scenario_file_names_the_file(tmp_path: Path) -> None:
     path = tmp_path / "scenario.toml"
     path.write_bytes(bytes(range(256)))
-    with pytest.raises(ValueError, match="scenario.toml"):
+    with pytest.raises(ValueError, match=r"scenario\.toml"):
         load_scenario(str(path))
 
 
