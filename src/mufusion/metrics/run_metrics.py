@@ -47,6 +47,15 @@ class RunMetrics:
         Planning steps that fell back to the shifted previous plan or a braking plan.
     sampling_reinits
         Planning steps whose initial guess came from the sampling augmentation.
+    faults_injected
+        Faults the scenario injected (``[[faults]]``).
+    estimate_fallbacks
+        Planning steps that did not get a current, finite estimate: the last valid one or the
+        friction floor was used instead (see :class:`~mufusion.sim.loop.ClosedLoop`).
+    component_errors
+        Exceptions raised by a component (friction source, planner, controller) or the loop.
+    minimal_risk
+        Whether the vehicle entered the minimal-risk manoeuvre; ``minimal_risk_at_s`` when.
     """
 
     collision: bool
@@ -64,6 +73,11 @@ class RunMetrics:
     sampling_reinits: int
     final_speed_mps: float
     duration_s: float
+    faults_injected: int = 0
+    estimate_fallbacks: int = 0
+    component_errors: int = 0
+    minimal_risk: bool = False
+    minimal_risk_at_s: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {k: _clean(v) for k, v in asdict(self).items()}
@@ -140,7 +154,28 @@ def compute_metrics(log: RunLog) -> RunMetrics:
         ),
         final_speed_mps=float(ts["speed_mps"].iloc[-1]),
         duration_s=float(ts["t_s"].iloc[-1]),
+        **_reliability(log),
     )
+
+
+# Event kinds that report an exception inside the loop (see mufusion.sim.loop).
+ERROR_EVENTS = ("friction_source_error", "planner_error", "controller_error", "loop_error")
+
+
+def _reliability(log: RunLog) -> dict[str, Any]:
+    events, steps = log.events, log.planning_steps
+    kinds = events["kind"].astype(str) if not events.empty else pd.Series(dtype=str)
+    mrm = events[kinds == "minimal_risk"] if not events.empty else events
+    return {
+        "faults_injected": int((kinds == "fault_scheduled").sum()),
+        "estimate_fallbacks": (
+            int(steps["estimate_source"].isin(["last_valid", "floor"]).sum())
+            if not steps.empty else 0
+        ),
+        "component_errors": int(kinds.isin(ERROR_EVENTS).sum()),
+        "minimal_risk": bool(len(mrm)),
+        "minimal_risk_at_s": float(mrm["t_s"].iloc[0]) if len(mrm) else None,
+    }
 
 
 def attach_gt_comparison(metrics: RunMetrics, gt: RunMetrics) -> RunMetrics:

@@ -16,6 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from mufusion.estimators import ErrorModel
 from mufusion.road import FrictionMap, Obstacle, Road, straight_road, turn_road
+from mufusion.sim.faults import Fault, SafetySettings
 from mufusion.sim.loop import LoopRates
 from mufusion.vehicle.params import VehicleParams
 
@@ -144,9 +145,19 @@ class _Scenario(_Strict):
     estimation: EstimationConfig = EstimationConfig()
     planner: PlannerSettings = PlannerSettings()
     sim: SimSettings = SimSettings()
+    faults: list[Fault] = []
+    """Faults to inject (``[[faults]]`` tables: kind, start_s, duration_s, delay_s)."""
+    safety: SafetySettings = SafetySettings()
+    """How the loop reacts to missing, stale or failing parts (:mod:`mufusion.sim.faults`)."""
 
     @model_validator(mode="after")
     def _check_common(self) -> _Scenario:
+        for i, fault in enumerate(self.faults):
+            if fault.start_s >= self.duration_s:
+                raise ValueError(
+                    f"faults.{i}.start_s must be before duration_s = {self.duration_s} s "
+                    f"(a fault after the end does nothing), got {fault.start_s}"
+                )
         if self.comparison_time_s >= self.duration_s:
             raise ValueError(
                 f"duration_s must exceed comparison_time_s = {self.comparison_time_s} s "

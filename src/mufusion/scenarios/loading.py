@@ -7,6 +7,7 @@ a key given twice, a value of the wrong type (a boolean is not a number) or outs
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 from importlib import resources
@@ -16,6 +17,7 @@ from typing import Any
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from mufusion.scenarios.config import SCENARIO_KINDS, PopupScenario, ScenarioConfig, TurnScenario
+from mufusion.sim.faults import Fault, SafetySettings
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -140,27 +142,44 @@ def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any
     return out
 
 
+def _fields(model: type | None) -> dict[str, Any]:
+    """Field name → annotation of a pydantic model or a dataclass (empty for anything else)."""
+    if isinstance(model, type) and issubclass(model, BaseModel):
+        return {name: f.annotation for name, f in model.model_fields.items()}
+    if model is not None and dataclasses.is_dataclass(model):
+        return {f.name: f.type for f in dataclasses.fields(model)}
+    return {}
+
+
 def _check_key(kind: type[BaseModel], parts: list[str], item: str) -> None:
-    model: type[BaseModel] | None = kind
+    model: type | None = kind
     for i, p in enumerate(parts):
-        if model is None or p not in model.model_fields:
-            allowed = sorted(model.model_fields) if model is not None else []
+        fields = _fields(model)
+        if p not in fields:
+            allowed = sorted(fields)
             where = ".".join(parts[:i]) or "top level"
             scenario = kind.model_fields["name"].annotation.__args__[0]  # type: ignore[union-attr]
             raise ValueError(
                 f"--set {item!r}: unknown key {'.'.join(parts[: i + 1])!r} for the "
                 f"{scenario!r} scenario; keys at {where}: {', '.join(allowed)}"
             )
-        model = _submodel(model.model_fields[p].annotation)
+        model = _submodel(fields[p])
 
 
-def _submodel(annotation: Any) -> type[BaseModel] | None:
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in getattr(annotation, "__args__", ()) or ():
-        if isinstance(arg, type) and issubclass(arg, BaseModel):
-            return arg
+def _submodel(annotation: Any) -> type | None:
+    """The model (pydantic or dataclass) an annotation holds, also inside ``X | None``."""
+    if isinstance(annotation, str):
+        annotation = _DATACLASS_NAMES.get(annotation)
+    candidates = [annotation, *(getattr(annotation, "__args__", ()) or ())]
+    for arg in candidates:
+        if isinstance(arg, type) and (issubclass(arg, BaseModel) or dataclasses.is_dataclass(arg)):
+            if arg is not list:
+                return arg
     return None
+
+
+# Dataclass annotations are strings under `from __future__ import annotations`.
+_DATACLASS_NAMES: dict[str, type] = {"SafetySettings": SafetySettings, "Fault": Fault}
 
 
 def load_scenario(

@@ -118,6 +118,8 @@ def run_scenario(
         reference_speed_mps=cfg.cruise_speed_mps,
         lane_bounds_m=(planner.config.lane_d_min_m, planner.config.lane_d_max_m),
         emergency_on_obstacle=isinstance(cfg, PopupScenario) and cfg.emergency_on_obstacle,
+        faults=tuple(cfg.faults),
+        safety=cfg.safety,
         meta=run_meta(cfg, configuration, params, road, planner.config),
     )
     return loop.run(cfg.duration_s, progress=progress, warmup_steps=WARMUP_PLANNING_STEPS)
