@@ -16,10 +16,10 @@ import warnings
 
 import numpy as np
 
-from mufusion.planner.acados_backend import constraint_expressions
 from mufusion.planner.ocp import (
     Param,
     PlannerConfig,
+    constraint_expressions,
     lateral_corridor,
     longitudinal_force_bounds_n,
     stage_parameters,
