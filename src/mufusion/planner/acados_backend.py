@@ -9,7 +9,7 @@ import logging
 
 import numpy as np
 
-from mufusion.planner.acados_loader import cache_dir, load_acados_template
+from mufusion.planner.acados_loader import AcadosUnavailable, cache_dir, load_acados_template
 from mufusion.planner.ocp import (
     MAX_SPEED_MPS,
     N_PARAMS,
@@ -136,6 +136,8 @@ class AcadosBackend:
             at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
         # The template imports the wrapper by a cwd-relative module path; load it by file instead.
         spec = importlib.util.spec_from_file_location("acados_ocp_solver_pyx", lib)
+        if spec is None or spec.loader is None:
+            raise AcadosUnavailable(f"cannot load the generated solver {lib}")
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
         self.solver = module.AcadosOcpSolverCython(name, "SQP_RTI", n)

@@ -7,6 +7,8 @@ wheel. The objective matches acados' conventions: stage cost and slack penalties
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from mufusion.planner.ocp import (
@@ -64,7 +66,7 @@ class CasadiBackend:
             return ca.sum1(ca.DM(linear) * s + 0.5 * ca.DM(quadratic) * s**2)
 
         corridor, rear = pen.corridor, pen.rear_polygon
-        cost = 0
+        cost: Any = 0
         g, lbg, ubg = [X[:, 0] - X0], [0.0] * N_STATES, [0.0] * N_STATES
         for k in range(n):
             r = ca.vertcat(X[:, k], U[:, k]) - YREF[:, k]

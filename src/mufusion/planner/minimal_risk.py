@@ -5,7 +5,8 @@ The manoeuvre a supervisor falls back to when the planner has not produced a usa
 roll-out needs no solver: the planner's model under a braking and lane-keeping law.
 
 * Deceleration target ``a_k = minimal_risk_decel_fraction · μ̂(s_k) · g`` (default 0.5 μ̂ g),
-  never more than stops the vehicle within the step; no traction.
+  never more than stops the vehicle within the step; no traction. Below 1 m/s (the planner
+  model's slip-speed floor) the vehicle is taken to rest and held there with the brakes on.
 * The braking force is split over the axles by their normal loads, and each axle's share is
   capped at 80 % of its friction limit ``λ μ̂ F_z``, so the tires keep lateral reserve.
 * Steering: the roll-outs' law of :mod:`mufusion.planner.sampling`, towards ``reference_d_m``
@@ -26,6 +27,7 @@ from mufusion.planner.ocp import PlannerConfig, longitudinal_force_bounds_n
 from mufusion.planner.sampling import SamplingConfig, rk4_step, steering_force_n
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
+    MIN_SPEED_FOR_SLIP_MPS,
     N_INPUTS,
     Input,
     State,
@@ -81,7 +83,6 @@ def minimal_risk_rollout(
     sc = sampling or SamplingConfig()
     n, dt, lam = config.horizon_steps, config.dt_s, config.utilization_factor
     m = params.mass_kg
-    lower, upper = longitudinal_force_bounds_n(params)
     x = np.asarray(x0, dtype=float).copy()
     xs, us = [x], []
     ax = 0.0
@@ -93,21 +94,43 @@ def minimal_risk_rollout(
         c_r = rear_cornering_stiffness_n_per_rad(params, fzr, lam)
         limit_f, limit_r = lam * mu * fzf, lam * mu * fzr
         # Brake at the declared deceleration, but never past standstill within this step.
-        decel = min(config.minimal_risk_decel_fraction * mu * GRAVITY_MPS2,
-                    max(x[State.vx], 0.0) / dt)
-        f_brake = m * decel
-        fxf = -min(f_brake * fzf / (fzf + fzr), BRAKING_SHARE_OF_LIMIT * limit_f, -lower[0])
-        fxr = -min(f_brake * fzr / (fzf + fzr), BRAKING_SHARE_OF_LIMIT * limit_r, -lower[1])
-        fxf, fxr = min(fxf, upper[0]), min(fxr, 0.0)
-        v = max(x[State.vx], 1.0)
-        fyf = float(steering_force_n(x, reference_d_m, kappa, v, params, sc))
-        room = np.sqrt(max(limit_f**2 - fxf**2, 0.0)) * 0.95
+        decel_target = config.minimal_risk_decel_fraction * mu * GRAVITY_MPS2
+        decel = min(decel_target, max(x[State.vx], 0.0) / dt)
+        fxf, fxr = _braking_forces_n(m * decel, fzf, fzr, limit_f, limit_r, params)
+        hold_f, hold_r = _braking_forces_n(m * decel_target, fzf, fzr, limit_f, limit_r, params)
         u = np.zeros(N_INPUTS)
-        u[Input.fyf] = np.clip(fyf, -room, room)
-        u[Input.fxf], u[Input.fxr] = fxf, fxr
-        x = rk4_step(x, u, kappa, c_r, params, dt)
-        x[State.vx] = max(x[State.vx], 0.0)
-        ax = (fxf + fxr) / m
+        if x[State.vx] <= MIN_SPEED_FOR_SLIP_MPS:
+            # Below the model's slip-speed floor its lateral modes are too stiff for an explicit
+            # step of dt; the remaining travel (v²/2a, under 0.2 m) is covered along the heading
+            # and the vehicle is held at rest with the brakes on.
+            travel = 0.5 * x[State.vx] ** 2 / max(decel_target, 1e-9)
+            x = x.copy()
+            x[State.s] += travel * np.cos(x[State.dpsi])
+            x[State.d] += travel * np.sin(x[State.dpsi])
+            x[State.vx] = x[State.vy] = x[State.psidot] = 0.0
+            u[Input.fxf], u[Input.fxr] = hold_f, hold_r
+            ax = 0.0
+        else:
+            v = max(x[State.vx], 1.0)
+            fyf = float(steering_force_n(x, reference_d_m, kappa, v, params, sc))
+            room = np.sqrt(max(limit_f**2 - fxf**2, 0.0)) * 0.95
+            u[Input.fyf] = np.clip(fyf, -room, room)
+            u[Input.fxf], u[Input.fxr] = fxf, fxr
+            x = rk4_step(x, u, kappa, c_r, params, dt)
+            x[State.vx] = max(x[State.vx], 0.0)
+            ax = (fxf + fxr) / m
         xs.append(x)
         us.append(u)
     return np.stack(xs), np.stack(us)
+
+
+def _braking_forces_n(
+    force_n: float, fzf: float, fzr: float, limit_f: float, limit_r: float,
+    params: VehicleParams,
+) -> tuple[float, float]:
+    """Braking force ``force_n`` ≥ 0 split by normal load, each axle capped (negative values)."""
+    lower, _ = longitudinal_force_bounds_n(params)
+    share_f = fzf / (fzf + fzr)
+    fxf = -min(force_n * share_f, BRAKING_SHARE_OF_LIMIT * limit_f, -lower[0])
+    fxr = -min(force_n * (1.0 - share_f), BRAKING_SHARE_OF_LIMIT * limit_r, -lower[1])
+    return fxf, fxr

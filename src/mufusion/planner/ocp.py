@@ -4,7 +4,7 @@ Small factories assemble the pieces: per-stage parameters (curvature, rear stiff
 radii), friction polygons and their constraint expressions, actuator bounds on the longitudinal
 forces, the lateral corridor from lanes and obstacles, the tracking reference and weights, and
 the slack penalties. Both backends (acados RTI, CasADi + IPOPT reference) build their problem
-from these pieces only, and implement :class:`PlannerBackend`.
+from these pieces only, and implement :class:`~mufusion.planner.backend.PlannerBackend`.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import Any, Literal, Protocol
+from typing import Any, Literal
 
 import numpy as np
 
@@ -80,7 +80,8 @@ class PlausibilityLimits:
 
     # Defaults sit well outside what accepted solutions reach in the shipped scenarios (all
     # configurations, emergency mode included: front 0, rear 0.75, bounds 0, corridor 1.5 m,
-    # heading 0.95 rad, speed −0.01 m/s; docs/planner.md) and well inside a diverged solution.
+    # heading 0.95 rad, speed −0.01 m/s; `python benchmarks/planner.py --margins`) and well
+    # inside a diverged solution.
     front_polygon_tolerance: float = 0.05
     rear_polygon_tolerance: float = 3.0
     force_bound_tolerance: float = 0.05
@@ -187,33 +188,6 @@ class PlannerConfig:
 # :mod:`mufusion.planner.safeguards` for non-finite ones).
 MU_MIN = 0.05
 MU_MAX = 2.0
-
-
-class PlannerBackend(Protocol):
-    """What the planner needs from an OCP solver (acados RTI, CasADi reference, or a test double).
-
-    ``solve`` takes the current state, the initial guess ``(N+1, 6)`` / ``(N, 3)``, the stage
-    parameters ``(N, N_PARAMS)``, the tracking reference ``(N+1, 9)`` and its weights ``(9,)``,
-    the corridor ``(N,)`` × 2, the lowest speed and the drive-force cap; it returns
-    ``(status, states, inputs)`` with status 0 or 2 for a usable solution. It may raise.
-    ``reset`` forgets every iterate and solver memory (after a failure).
-    """
-
-    def solve(
-        self,
-        x0: np.ndarray,
-        guess_x: np.ndarray,
-        guess_u: np.ndarray,
-        p: np.ndarray,
-        yref: np.ndarray,
-        weights: np.ndarray,
-        d_lo: np.ndarray,
-        d_hi: np.ndarray,
-        min_speed_mps: float,
-        max_drive_force_n: float | None = None,
-    ) -> tuple[int, np.ndarray, np.ndarray]: ...
-
-    def reset(self) -> None: ...
 
 
 def longitudinal_force_bounds_n(params: VehicleParams) -> tuple[np.ndarray, np.ndarray]:

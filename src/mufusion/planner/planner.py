@@ -17,11 +17,11 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from mufusion.planner.backend import PlannerBackend
 from mufusion.planner.minimal_risk import minimal_risk_rollout
 from mufusion.planner.ocp import (
     PLANNER_MODES,
     CostWeights,
-    PlannerBackend,
     PlannerConfig,
     PlannerMode,
     PlannerObstacle,
@@ -104,7 +104,7 @@ class TractionAdaptivePlanner:
     backend
         The OCP solver; default: acados RTI for ``config.backend == "acados"`` (CasADi + IPOPT
         if acados cannot be loaded), else CasADi + IPOPT. Any object implementing
-        :class:`~mufusion.planner.ocp.PlannerBackend` (e.g. one that injects faults) works.
+        :class:`~mufusion.planner.backend.PlannerBackend` (e.g. one that injects faults) works.
     """
 
     def __init__(

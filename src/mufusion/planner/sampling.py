@@ -75,8 +75,8 @@ def tracking_cost(states: np.ndarray, v_ref: float, d_ref: float) -> np.ndarray:
 def steering_force_n(
     x: np.ndarray,
     d_target_m: np.ndarray | float,
-    curvature_1pm: np.ndarray,
-    speed_mps: np.ndarray,
+    curvature_1pm: np.ndarray | float,
+    speed_mps: np.ndarray | float,
     params: VehicleParams,
     config: SamplingConfig,
 ) -> np.ndarray:
@@ -100,8 +100,8 @@ def steering_force_n(
 def rk4_step(
     x: np.ndarray,
     u: np.ndarray,
-    curvature_1pm: np.ndarray,
-    rear_stiffness: np.ndarray,
+    curvature_1pm: np.ndarray | float,
+    rear_stiffness: np.ndarray | float,
     params: VehicleParams,
     dt_s: float,
 ) -> np.ndarray:
