@@ -5,32 +5,41 @@ a road with a curve and a friction drop; the plant is the planner's model under 
 input (fine RK4). Per step we time constraint update + solve + read-out. Prints a JSON line with
 ``median_step_ms``, ``p99_step_ms``, ``max_step_ms``, ``speedup_vs_dompc``; numbers go to
 docs/performance.md, section "## Planner".
+
+``python benchmarks/planner.py --margins`` instead runs the shipped scenarios (pop-up and turn, all
+five configurations, and the pop-up with ``emergency_on_obstacle=true``) and prints, as a JSON
+line, how far the solutions the planner accepted went towards the limits of its solution check
+(docs/planner.md, "Solution check").
 """
 
 from __future__ import annotations
 
 import json
 import logging
+import sys
 import time
 import warnings
 
 import numpy as np
 
-from mufusion.planner.acados_backend import constraint_expressions
 from mufusion.planner.ocp import (
     Param,
     PlannerConfig,
+    constraint_expressions,
     lateral_corridor,
     longitudinal_force_bounds_n,
+    polygon_directions,
     stage_parameters,
 )
 from mufusion.planner.planner import TractionAdaptivePlanner, rollout
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.planner_model import (
+    Input,
     State,
     frenet_bicycle_dynamics,
     normal_loads_n,
     rear_cornering_stiffness_n_per_rad,
+    rear_lateral_force_n,
 )
 
 STEPS = 220
@@ -154,9 +163,58 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
     return 1e3 * np.array(times)
 
 
+def solution_margins() -> dict[str, float]:
+    """Largest excursions of accepted solutions towards the solution check's limits."""
+    import mufusion.planner.planner as planner_module
+    from mufusion.scenarios import load_scenario
+    from mufusion.scenarios.runner import run_scenario
+
+    worst = {"front_polygon_excess": -np.inf, "rear_polygon_excess": -np.inf,
+             "force_bound_excess": -np.inf, "corridor_excess_m": -np.inf,
+             "abs_heading_error_rad": 0.0, "min_speed_mps": np.inf}
+    check = planner_module.check_solution
+
+    def measuring_check(xs, us, stage, d_lo, d_hi, params, n_sides, limits):
+        reason = check(xs, us, stage, d_lo, d_hi, params, n_sides, limits)
+        if reason.value != "none":
+            return reason
+        normals, ratio = polygon_directions(n_sides)
+        front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
+        fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], params)
+        rear = normals @ np.stack([us[:, Input.fxr], fyr])
+        lower, upper = longitudinal_force_bounds_n(params)
+        fx = us[:, [Input.fxf, Input.fxr]]
+        bound = np.maximum(lower - fx, fx - upper) / np.maximum(np.abs(lower), np.abs(upper))
+        d = xs[1:, State.d]
+        for key, value in (
+            ("front_polygon_excess", (front / stage["radius_front"] - ratio).max()),
+            ("rear_polygon_excess", (rear / stage["radius_rear"] - ratio).max()),
+            ("force_bound_excess", bound.max()),
+            ("corridor_excess_m", np.maximum(d_lo - d, d - d_hi).max()),
+            ("abs_heading_error_rad", np.abs(xs[:, State.dpsi]).max()),
+        ):
+            worst[key] = max(worst[key], float(value))
+        worst["min_speed_mps"] = min(worst["min_speed_mps"], float(xs[:, State.vx].min()))
+        return reason
+
+    planner_module.check_solution = measuring_check
+    try:
+        runs = [(name, [], c) for name in ("popup", "turn")
+                for c in ("GT", "L", "P", "F", "F-safe")]
+        runs.append(("popup", ["emergency_on_obstacle=true"], "F"))
+        for name, overrides, configuration in runs:
+            run_scenario(load_scenario(name, overrides), configuration)
+    finally:
+        planner_module.check_solution = check
+    return {key: round(value, 3) for key, value in worst.items()}
+
+
 def main() -> None:
     logging.basicConfig(level=logging.WARNING)
     warnings.filterwarnings("ignore")
+    if "--margins" in sys.argv[1:]:
+        print(json.dumps(solution_margins()))
+        return
     config = PlannerConfig(lane_d_min_m=LANE[0], lane_d_max_m=LANE[1], use_sampling=True)
     ours = run_ours(config)
     theirs = run_dompc(config)

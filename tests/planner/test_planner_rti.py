@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mufusion.planner.ocp import PlannerConfig, polygon_directions
-from mufusion.planner.planner import Plan, TractionAdaptivePlanner
+from mufusion.planner.planner import FallbackReason, Plan, TractionAdaptivePlanner
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.planner_model import Input
 
@@ -19,7 +19,7 @@ def planner() -> TractionAdaptivePlanner:
 
 
 def _closed_loop(planner, kappa: float, mu: float, steps: int = 30) -> list[Plan]:
-    planner._prev = None
+    planner.reset()
     x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
     plans = []
     for i in range(steps):
@@ -56,10 +56,11 @@ def test_injected_failure_falls_back_and_loop_continues(planner, monkeypatch, ca
     def broken(*args, **kwargs):
         raise RuntimeError("injected")
 
-    monkeypatch.setattr(planner._backend, "solve", broken)
-    x = planner._prev.states[1]
+    monkeypatch.setattr(planner.backend, "solve", broken)
+    x = planner.last_plan.states[1]
     plan = planner.step(x, 0.3, lambda s: 0 * s, lambda s: 0.9 + 0 * s, [], "cruise", 15.0)
     assert plan.fallback and not plan.ok
+    assert plan.fallback_reason is FallbackReason.EXCEPTION
     assert planner.failures == before + 1
     assert np.all(np.isfinite(plan.states))
     assert "failed" in caplog.text
@@ -75,7 +76,7 @@ def test_acados_unavailable_falls_back_to_casadi_with_warning(monkeypatch, caplo
 
     monkeypatch.setattr(acados_backend, "load_acados_template", missing)
     planner = TractionAdaptivePlanner(TRUCK, PlannerConfig(horizon_steps=10))
-    assert isinstance(planner._backend, CasadiBackend)
+    assert isinstance(planner.backend, CasadiBackend)
     assert "falling back" in caplog.text
     plan = planner.step(np.array([0.0, 0.0, 0.0, 0.0, 10.0, 0.0]), 0.0, lambda s: 0 * s,
                         lambda s: 0.8 + 0 * s, [], "cruise", 10.0)
@@ -83,7 +84,7 @@ def test_acados_unavailable_falls_back_to_casadi_with_warning(monkeypatch, caplo
 
 
 def test_emergency_mode_stops_about_as_short_as_friction_allows(planner):
-    planner._prev = None
+    planner.reset()
     x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
     mu = 0.8
     for i in range(40):
@@ -106,7 +107,7 @@ def test_config_rejects_bad_values():
 
 
 def test_evade_mode_spends_no_friction_on_traction_and_does_not_speed_up(planner):
-    planner._prev = None
+    planner.reset()
     x = np.array([0.0, 0.0, 0.0, 0.0, 18.0, 0.0])
     obstacle = [(30.0, 0.0, 1.0, 1.0)]
     plan = planner.step(x, 0.0, lambda s: 0 * s, lambda s: 0.9 + 0 * s, obstacle, "evade", 20.0,

@@ -19,7 +19,7 @@ def _curvature(s):
 
 def _loop(planner, steps, mu_of_s, obstacle_at_step=None, obstacle_offset=(30.0, 0.0), v=15.0,
           lane=(-0.45, 3.95)):
-    planner._prev = None
+    planner.reset()
     x = np.array([0.0, 0.0, 0.0, 0.0, v, 0.0])
     obstacles, plans, clearance = [], [], np.inf
     for i in range(steps):

@@ -110,10 +110,10 @@ def test_locked_wheels_request_more_than_the_road_gives() -> None:
     for _ in range(200):
         out = plant.step(ActuatorCommand(0.0, -1e6, -1e6), mu, mu)
     assert out.x[PlantState.OMEGA_FRONT] == 0.0 and out.x[PlantState.OMEGA_REAR] == 0.0
-    assert out.requested_utilization_front > 1.0 and out.requested_utilization_rear > 1.0
+    assert out.front.requested_utilization > 1.0 and out.rear.requested_utilization > 1.0
     assert out.utilization_front <= 1.0 and out.utilization_rear <= 1.0
     # Sliding: the wheel runs at zero speed while the truck still moves.
-    assert out.slip_ratio_front == pytest.approx(-1.0)
+    assert out.front.slip_ratio == pytest.approx(-1.0)
 
 
 def test_cornering_above_the_limit_slides_and_leaves_the_kinematic_path() -> None:
@@ -128,8 +128,8 @@ def test_cornering_above_the_limit_slides_and_leaves_the_kinematic_path() -> Non
             path.append(out)
         runs[mu] = path
     low = runs[0.3]
-    assert low[-1].requested_utilization_front > 1.0
-    assert low[-1].utilization_front <= 1.0
+    assert low[-1].front.requested_utilization > 1.0
+    assert low[-1].front.utilization <= 1.0
     # High μ follows the steering (a_y ≈ v² tan δ / L > 0.3 g); low μ is capped at μ g and the
     # side-slip angle keeps growing.
     kinematic = speed**2 * math.tan(steer) / TRUCK.wheelbase_m
@@ -154,12 +154,15 @@ def test_friction_under_one_axle_only_affects_that_axle() -> None:
     x[PlantState.VY] = -0.8
     x[PlantState.YAW_RATE] = 0.3
     x[PlantState.STEER] = 0.1
-    base = axle_forces(x, 0.8, 0.8, TRUCK)
-    changed = axle_forces(x, 0.8, 0.2, TRUCK)
-    assert changed.fyr != pytest.approx(base.fyr, rel=0.05)
-    assert changed.fyf / changed.fzf == pytest.approx(base.fyf / base.fzf, rel=1e-12)
-    assert changed.used_f == pytest.approx(base.used_f, rel=1e-12)
-    assert changed.asked_r == pytest.approx(4.0 * base.asked_r, rel=1e-9)
+    base_front, base_rear = axle_forces(x, 0.8, 0.8, TRUCK)
+    front, rear = axle_forces(x, 0.8, 0.2, TRUCK)
+    assert rear.fy_n != pytest.approx(base_rear.fy_n, rel=0.05)
+    assert front.fy_n / front.fz_n == pytest.approx(base_front.fy_n / base_front.fz_n, rel=1e-12)
+    assert front.utilization == pytest.approx(base_front.utilization, rel=1e-12)
+    assert rear.requested_utilization == pytest.approx(
+        4.0 * base_rear.requested_utilization, rel=1e-9
+    )
+    assert (front.mu, rear.mu) == (0.8, 0.2)
 
 
 def test_split_mu_braking_locks_only_the_low_mu_axle() -> None:
@@ -169,7 +172,7 @@ def test_split_mu_braking_locks_only_the_low_mu_axle() -> None:
         out = plant.step(command, 0.2, 0.8)
     assert out.x[PlantState.OMEGA_FRONT] == 0.0
     assert out.x[PlantState.OMEGA_REAR] > 0.8 * out.speed_mps / TRUCK.wheel_radius_m
-    assert out.requested_utilization_front > 1.0 > out.requested_utilization_rear
+    assert out.front.requested_utilization > 1.0 > out.rear.requested_utilization
 
 
 def test_steering_actuator_respects_rate_and_angle_limits() -> None:
@@ -209,17 +212,13 @@ def test_step_agrees_with_fine_integration_of_the_pure_derivative() -> None:
 
 def test_initial_state_rolls_freely_and_axles_are_a_wheelbase_apart() -> None:
     x = initial_state(TRUCK, 3.0, -2.0, 0.7, 12.0)
-    forces = axle_forces(x, 0.8, 0.8, TRUCK)
-    assert forces.kappa_f == pytest.approx(0.0, abs=1e-12)
-    assert forces.kappa_r == pytest.approx(0.0, abs=1e-12)
+    front, rear = axle_forces(x, 0.8, 0.8, TRUCK)
+    assert front.slip_ratio == pytest.approx(0.0, abs=1e-12)
+    assert rear.slip_ratio == pytest.approx(0.0, abs=1e-12)
     xd = plant_derivative(x, ActuatorCommand(0.0, 0.0, 0.0), 0.8, 0.8, TRUCK)
     assert xd[PlantState.VX] == pytest.approx(0.0, abs=1e-9)
     front, rear = axle_positions(x, TRUCK)
     assert math.dist(front, rear) == pytest.approx(TRUCK.wheelbase_m)
-    out = Plant(TRUCK, x).step(ActuatorCommand(0.0, 0.0, 0.0), 0.8, 0.8)
-    front, rear = axle_positions(out.x, TRUCK)
-    assert out.front_axle_xy_m == pytest.approx(tuple(front))
-    assert out.rear_axle_xy_m == pytest.approx(tuple(rear))
 
 
 @pytest.mark.parametrize(

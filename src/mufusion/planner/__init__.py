@@ -1,16 +1,21 @@
 """mufusion.planner: traction-adaptive MPC planner and the controller that tracks its plans."""
 
+from mufusion.planner.backend import PlannerBackend
 from mufusion.planner.controller import ControllerGains, TrackingController
-from mufusion.planner.ocp import CostWeights, PlannerConfig, PlannerObstacle
-from mufusion.planner.planner import Plan, TractionAdaptivePlanner
+from mufusion.planner.ocp import CostWeights, PlannerConfig, PlannerObstacle, PlausibilityLimits
+from mufusion.planner.plan import FallbackReason, Plan
+from mufusion.planner.planner import TractionAdaptivePlanner
 from mufusion.planner.sampling import SamplingConfig
 
 __all__ = [
     "ControllerGains",
     "CostWeights",
+    "FallbackReason",
     "Plan",
+    "PlannerBackend",
     "PlannerConfig",
     "PlannerObstacle",
+    "PlausibilityLimits",
     "SamplingConfig",
     "TrackingController",
     "TractionAdaptivePlanner",

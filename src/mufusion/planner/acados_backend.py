@@ -9,13 +9,16 @@ import logging
 
 import numpy as np
 
-from mufusion.planner.acados_loader import cache_dir, load_acados_template
+from mufusion.planner.acados_loader import AcadosUnavailable, cache_dir, load_acados_template
 from mufusion.planner.ocp import (
+    MAX_SPEED_MPS,
     N_PARAMS,
+    POLYGON_ROW_LOWER_BOUND,
     Param,
     PlannerConfig,
+    constraint_expressions,
     longitudinal_force_bounds_n,
-    polygon_directions,
+    slack_penalties,
 )
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
@@ -24,7 +27,6 @@ from mufusion.vehicle.planner_model import (
     Input,
     State,
     frenet_bicycle_dynamics,
-    rear_lateral_force_n,
 )
 
 _log = logging.getLogger(__name__)
@@ -44,20 +46,6 @@ def problem_hash(params: VehicleParams, config: PlannerConfig) -> str:
         sort_keys=True,
     )
     return hashlib.sha256(text.encode()).hexdigest()[:16]
-
-
-def constraint_expressions(x, u, p, params: VehicleParams, n_sides: int):
-    """Friction polygons, normalised by their radii: ``h ≤ 0`` (front n rows, then rear n rows)."""
-    import casadi as ca
-
-    normals, ratio = polygon_directions(n_sides)
-    fyr = rear_lateral_force_n(x, p[Param.rear_stiffness], params)
-    front = [
-        (nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front] - ratio
-        for nx, ny in normals
-    ]
-    rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] - ratio for nx, ny in normals]
-    return ca.vertcat(*front, *rear)
 
 
 class AcadosBackend:
@@ -104,7 +92,7 @@ class AcadosBackend:
         ocp.constraints.x0 = np.array([0, 0, 0, 0, 10.0, 0])
         ocp.constraints.idxbx = np.array([State.d, State.vx])
         ocp.constraints.lbx = np.array([-1.0, 0.0])
-        ocp.constraints.ubx = np.array([1.0, 100.0])
+        ocp.constraints.ubx = np.array([1.0, MAX_SPEED_MPS])
         ocp.constraints.idxsbx = np.array([0])
         ocp.constraints.idxbx_e = np.array([State.d])
         ocp.constraints.lbx_e = np.array([-1.0])
@@ -113,21 +101,18 @@ class AcadosBackend:
         ocp.constraints.idxbu = np.array([Input.fxf, Input.fxr])
         ocp.constraints.lbu, ocp.constraints.ubu = longitudinal_force_bounds_n(params)
         self._ubu = np.array(ocp.constraints.ubu, dtype=float)
-        ocp.constraints.lh = np.full(2 * ns, -1e3)
+        ocp.constraints.lh = np.full(2 * ns, POLYGON_ROW_LOWER_BOUND)
         ocp.constraints.uh = np.zeros(2 * ns)
         # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
-        # follows the state, which at stage 0 is fixed, so the rear polygon is soft.
+        # follows the state, which at stage 0 is fixed, so the rear polygon is soft. acados
+        # orders a stage's slacks as the soft bounds (d) first, then the soft h rows, which is
+        # the layout of SlackPenalties.
         ocp.constraints.idxsh = np.arange(ns, 2 * ns)
-        w = config.weights
-        n_slack = 1 + ns
-        ocp.cost.zl = np.full(n_slack, w.slack_l1)
-        ocp.cost.zu = np.full(n_slack, w.slack_l1)
-        ocp.cost.Zl = np.full(n_slack, w.slack_l2)
-        ocp.cost.Zu = np.full(n_slack, w.slack_l2)
-        ocp.cost.zl_e = np.full(1, w.slack_l1)
-        ocp.cost.zu_e = np.full(1, w.slack_l1)
-        ocp.cost.Zl_e = np.full(1, w.slack_l2)
-        ocp.cost.Zu_e = np.full(1, w.slack_l2)
+        penalties = slack_penalties(config.weights, ns)
+        ocp.cost.zl = ocp.cost.zu = penalties.linear_stage
+        ocp.cost.Zl = ocp.cost.Zu = penalties.quadratic_stage
+        ocp.cost.zl_e = ocp.cost.zu_e = penalties.linear_terminal
+        ocp.cost.Zl_e = ocp.cost.Zu_e = penalties.quadratic_terminal
 
         so = ocp.solver_options
         so.tf = n * config.dt_s
@@ -151,6 +136,8 @@ class AcadosBackend:
             at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
         # The template imports the wrapper by a cwd-relative module path; load it by file instead.
         spec = importlib.util.spec_from_file_location("acados_ocp_solver_pyx", lib)
+        if spec is None or spec.loader is None:
+            raise AcadosUnavailable(f"cannot load the generated solver {lib}")
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
         self.solver = module.AcadosOcpSolverCython(name, "SQP_RTI", n)
@@ -189,7 +176,7 @@ class AcadosBackend:
             s.constraints_set(k, "ubu", ubu)
             if k > 0:
                 s.constraints_set(k, "lbx", np.array([d_lo[k - 1], min_speed_mps]))
-                s.constraints_set(k, "ubx", np.array([d_hi[k - 1], 100.0]))
+                s.constraints_set(k, "ubx", np.array([d_hi[k - 1], MAX_SPEED_MPS]))
         s.set(n, "x", guess_x[n])
         s.set(n, "p", p[n - 1])
         s.cost_set(n, "yref", yref[n][:N_STATES])
@@ -200,5 +187,13 @@ class AcadosBackend:
         xs = np.array([s.get(k, "x") for k in range(n + 1)])
         us = np.array([s.get(k, "u") for k in range(n)])
         return int(status), xs, us
+
+    def reset(self) -> None:
+        """Zero every iterate (primal, dual, slacks) and the QP solver's memory.
+
+        After a failed QP the multipliers can hold NaN; ``solve`` overwrites x and u from the
+        guess but not the multipliers, so without this every later RTI step fails as well.
+        """
+        self.solver.reset(1)
 
 

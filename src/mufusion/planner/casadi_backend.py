@@ -7,14 +7,22 @@ wheel. The objective matches acados' conventions: stage cost and slack penalties
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-from mufusion.planner.acados_backend import constraint_expressions
-from mufusion.planner.ocp import N_PARAMS, Param, PlannerConfig, longitudinal_force_bounds_n
+from mufusion.planner.ocp import (
+    MAX_SPEED_MPS,
+    N_PARAMS,
+    POLYGON_ROW_LOWER_BOUND,
+    Param,
+    PlannerConfig,
+    constraint_expressions,
+    longitudinal_force_bounds_n,
+    slack_penalties,
+)
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import N_INPUTS, N_STATES, Input, State, frenet_bicycle_dynamics
-
-_MAX_SPEED_MPS = 100.0
 
 
 class CasadiBackend:
@@ -25,7 +33,7 @@ class CasadiBackend:
 
         self.params, self.config = params, config
         n, ns, dt = config.horizon_steps, config.polygon_sides, config.dt_s
-        w = config.weights
+        pen = slack_penalties(config.weights, ns)
         x = ca.SX.sym("x", N_STATES)
         u = ca.SX.sym("u", N_INPUTS)
         p = ca.SX.sym("p", N_PARAMS)
@@ -54,28 +62,34 @@ class CasadiBackend:
         DLO = ca.SX.sym("DLO", n)
         DHI = ca.SX.sym("DHI", n)
 
-        def slack_cost(s):
-            return ca.sum1(w.slack_l1 * s + 0.5 * w.slack_l2 * s**2)
+        def slack_cost(s, linear, quadratic):
+            return ca.sum1(ca.DM(linear) * s + 0.5 * ca.DM(quadratic) * s**2)
 
-        cost = 0
+        corridor, rear = pen.corridor, pen.rear_polygon
+        cost: Any = 0
         g, lbg, ubg = [X[:, 0] - X0], [0.0] * N_STATES, [0.0] * N_STATES
         for k in range(n):
             r = ca.vertcat(X[:, k], U[:, k]) - YREF[:, k]
             cost += dt * 0.5 * ca.sum1(WD * r**2)
-            cost += dt * slack_cost(S_r[:, k])
+            cost += dt * slack_cost(
+                S_r[:, k], pen.linear_stage[rear], pen.quadratic_stage[rear]
+            )
             g.append(X[:, k + 1] - step(X[:, k], U[:, k], P[:, k]))
             lbg += [0.0] * N_STATES
             ubg += [0.0] * N_STATES
             hk = h(X[:, k], U[:, k], P[:, k])
             g.append(hk[:ns])
-            lbg += [-1e3] * ns
+            lbg += [POLYGON_ROW_LOWER_BOUND] * ns
             ubg += [0.0] * ns
             g.append(hk[ns:] - S_r[:, k])
-            lbg += [-1e3] * ns
+            lbg += [POLYGON_ROW_LOWER_BOUND] * ns
             ubg += [0.0] * ns
             # d bounds at stage k+1 (softened); terminal slacks carry no dt factor.
-            scale = dt if k < n - 1 else 1.0
-            cost += scale * (slack_cost(S_lo[k]) + slack_cost(S_hi[k]))
+            if k < n - 1:
+                scale, z1, z2 = dt, pen.linear_stage[corridor], pen.quadratic_stage[corridor]
+            else:
+                scale, z1, z2 = 1.0, pen.linear_terminal, pen.quadratic_terminal
+            cost += scale * (slack_cost(S_lo[k], z1, z2) + slack_cost(S_hi[k], z1, z2))
             g.append(X[State.d, k + 1] + S_lo[k] - DLO[k])
             lbg.append(0.0)
             ubg.append(np.inf)
@@ -113,7 +127,7 @@ class CasadiBackend:
         ubx_x = np.full((n + 1, N_STATES), np.inf)
         # vx bounds at stages 1..N-1 are hard, as in the acados description.
         lbx_x[1:n, State.vx] = min_speed_mps
-        ubx_x[1:n, State.vx] = _MAX_SPEED_MPS
+        ubx_x[1:n, State.vx] = MAX_SPEED_MPS
         lbz = np.concatenate([lbx_x.ravel(), self._lbu.ravel(), np.zeros(self._n_slack)])
         ubz = np.concatenate([ubx_x.ravel(), ubu.ravel(), np.full(self._n_slack, np.inf)])
         z0 = np.concatenate([guess_x.ravel(), guess_u.ravel(), np.zeros(self._n_slack)])
@@ -124,6 +138,9 @@ class CasadiBackend:
         xs = z[: self._n_x].reshape(n + 1, N_STATES)
         us = z[self._n_x : self._n_x + self._n_u].reshape(n, N_INPUTS)
         return (0 if ok else 1), xs, us
+
+    def reset(self) -> None:
+        """Nothing to forget: every solve starts from the guess it is given."""
 
 
 __all__ = ["CasadiBackend", "Input"]

@@ -1,8 +1,10 @@
 """Backend-independent description of the traction-adaptive OCP (Svensson & Törngren, Sec. II).
 
 Small factories assemble the pieces: per-stage parameters (curvature, rear stiffness, polygon
-radii), friction polygons, actuator bounds on the longitudinal forces, the lateral corridor from
-lanes and obstacles, and the cost weights.
+radii), friction polygons and their constraint expressions, actuator bounds on the longitudinal
+forces, the lateral corridor from lanes and obstacles, the tracking reference and weights, and
+the slack penalties. Both backends (acados RTI, CasADi + IPOPT reference) build their problem
+from these pieces only, and implement :class:`~mufusion.planner.backend.PlannerBackend`.
 """
 
 from __future__ import annotations
@@ -10,17 +12,28 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
-from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
+    N_INPUTS,
+    N_STATES,
     Input,
     State,
     normal_loads_n,
     rear_cornering_stiffness_n_per_rad,
+    rear_lateral_force_n,
 )
+
+PlannerMode = Literal["cruise", "evade", "emergency", "minimal_risk"]
+PLANNER_MODES: tuple[str, ...] = ("cruise", "evade", "emergency", "minimal_risk")
+
+# Upper bound on v_x at stages 1..N [m/s]: inactive in practice, it keeps the box finite.
+MAX_SPEED_MPS = 100.0
+# Lower bound of each (normalised) friction-polygon row: inactive, acados needs a finite one.
+POLYGON_ROW_LOWER_BOUND = -1e3
 
 
 class Param(IntEnum):
@@ -52,6 +65,50 @@ class CostWeights:
 
 
 @dataclass(frozen=True)
+class PlausibilityLimits:
+    """Tolerances of the check a solver's "success" must pass before its plan is used.
+
+    Forces are compared with the friction polygons used in the solve: a row may exceed its
+    inscribed radius by ``front_polygon_tolerance`` (front, a hard constraint: only solver
+    tolerance) or ``rear_polygon_tolerance`` (rear, soft: its slack may be used) as a fraction of
+    the polygon radius; longitudinal forces may exceed the actuator bounds by
+    ``force_bound_tolerance`` of the bound. ``d`` may leave the stage's corridor by
+    ``corridor_tolerance_m`` (the corridor is soft), ``|Δψ|`` may not exceed
+    ``max_heading_error_rad`` and ``v_x`` must lie in ``[-speed_tolerance_mps,
+    MAX_SPEED_MPS + speed_tolerance_mps]``.
+    """
+
+    # Defaults sit well outside what accepted solutions reach in the shipped scenarios (all
+    # configurations, emergency mode included: front 0, rear 0.75, bounds 0, corridor 1.5 m,
+    # heading 0.95 rad, speed −0.01 m/s; `python benchmarks/planner.py --margins`) and well
+    # inside a diverged solution.
+    front_polygon_tolerance: float = 0.05
+    rear_polygon_tolerance: float = 3.0
+    force_bound_tolerance: float = 0.05
+    corridor_tolerance_m: float = 5.0
+    max_heading_error_rad: float = 1.5
+    speed_tolerance_mps: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("front_polygon_tolerance", "rear_polygon_tolerance", "force_bound_tolerance"):
+            value = getattr(self, name)
+            if not 0.0 <= value <= 10.0:
+                raise ValueError(f"{name} must be in [0, 10], got {value}")
+        if not 0.0 <= self.corridor_tolerance_m <= 100.0:
+            raise ValueError(
+                f"corridor_tolerance_m must be in [0, 100] m, got {self.corridor_tolerance_m}"
+            )
+        if not 0.0 < self.max_heading_error_rad <= np.pi:
+            raise ValueError(
+                f"max_heading_error_rad must be in (0, pi], got {self.max_heading_error_rad}"
+            )
+        if not 0.0 <= self.speed_tolerance_mps <= 100.0:
+            raise ValueError(
+                f"speed_tolerance_mps must be in [0, 100] m/s, got {self.speed_tolerance_mps}"
+            )
+
+
+@dataclass(frozen=True)
 class PlannerObstacle:
     """An obstacle in road coordinates: centre ``(s_m, d_m)``, extent ``length_m × width_m``."""
 
@@ -79,6 +136,14 @@ class PlannerConfig:
     min_speed_mps: float = 0.5
     cold_start_iterations: int = 3
     max_cruise_accel_mps2: float = 1.5
+    # Recovery (see docs/planner.md, "Failures and recovery"). After this many planning steps in a
+    # row without a usable solution the caller should switch to mode "minimal_risk".
+    max_consecutive_fallbacks: int = 5
+    # Minimal-risk manoeuvre: brake in lane at this fraction of μ̂ g.
+    minimal_risk_decel_fraction: float = 0.5
+    # μ̂ used for a stage whose estimate is non-finite or <= 0 when no earlier profile covers it.
+    mu_floor: float = 0.1
+    plausibility: PlausibilityLimits = field(default_factory=PlausibilityLimits)
 
     def __post_init__(self) -> None:
         if not 5 <= self.horizon_steps <= 200:
@@ -103,6 +168,26 @@ class PlannerConfig:
             )
         if self.lane_d_min_m >= self.lane_d_max_m:
             raise ValueError("lane_d_min_m must be below lane_d_max_m")
+        if isinstance(self.max_consecutive_fallbacks, bool) or not (
+            1 <= self.max_consecutive_fallbacks <= 1000
+        ):
+            raise ValueError(
+                "max_consecutive_fallbacks must be an integer in [1, 1000], "
+                f"got {self.max_consecutive_fallbacks!r}"
+            )
+        if not 0.0 < self.minimal_risk_decel_fraction <= 1.0:
+            raise ValueError(
+                "minimal_risk_decel_fraction must be in (0, 1], "
+                f"got {self.minimal_risk_decel_fraction}"
+            )
+        if not MU_MIN <= self.mu_floor <= MU_MAX:
+            raise ValueError(f"mu_floor must be in [{MU_MIN}, {MU_MAX}], got {self.mu_floor}")
+
+
+# Range of μ̂ the planner accepts per stage; finite values outside are clipped to it (see
+# :mod:`mufusion.planner.safeguards` for non-finite ones).
+MU_MIN = 0.05
+MU_MAX = 2.0
 
 
 def longitudinal_force_bounds_n(params: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
@@ -142,7 +227,7 @@ def stage_parameters(
     fzf, fzr = normal_loads_n(ax, params)
     fzf = np.maximum(fzf, 0.05 * params.mass_kg * 9.81)
     fzr = np.maximum(fzr, 0.05 * params.mass_kg * 9.81)
-    mu = np.clip(np.asarray(mu_hat_of_s(s_k), dtype=float), 0.05, 2.0)
+    mu = np.clip(np.asarray(mu_hat_of_s(s_k), dtype=float), MU_MIN, MU_MAX)
     kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
     c_r = rear_cornering_stiffness_n_per_rad(params, fzr, utilization_factor)
     radius_front = utilization_factor * mu * fzf
@@ -215,3 +300,128 @@ def lateral_corridor(
         lo = np.where(overlap & left, np.maximum(lo, ob.d_m + clear), lo)
         hi = np.where(overlap & ~left, np.minimum(hi, ob.d_m - clear), hi)
     return lo, hi
+
+
+def constraint_expressions(x: Any, u: Any, p: Any, params: VehicleParams, n_sides: int) -> Any:
+    """Friction polygons normalised by their radii, as CasADi expressions: ``h ≤ 0``.
+
+    Rows: the front polygon over ``(F_xf, F_yf)`` (``n_sides`` rows, hard), then the rear polygon
+    over ``(F_xr, F_yr(x))`` (``n_sides`` rows, soft; see :func:`slack_penalties`).
+    """
+    import casadi as ca
+
+    normals, ratio = polygon_directions(n_sides)
+    fyr = rear_lateral_force_n(x, p[Param.rear_stiffness], params)
+    front = [
+        (nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front] - ratio
+        for nx, ny in normals
+    ]
+    rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] - ratio for nx, ny in normals]
+    return ca.vertcat(*front, *rear)
+
+
+@dataclass(frozen=True)
+class SlackPenalties:
+    """Exact-penalty weights of the soft constraints, per slack variable (lower = upper side).
+
+    Soft at stages 1..N−1: the corridor bound on ``d`` (one slack), then the ``n_sides`` rear
+    polygon rows; at the terminal stage N: the corridor bound only. The penalty of a slack
+    ``σ ≥ 0`` is ``linear σ + quadratic σ² / 2``; acados multiplies stage penalties by ``dt``
+    (the terminal one not), and the reference backend does the same.
+    """
+
+    linear_stage: np.ndarray
+    quadratic_stage: np.ndarray
+    linear_terminal: np.ndarray
+    quadratic_terminal: np.ndarray
+
+    @property
+    def corridor(self) -> slice:
+        """Index of the corridor slack within a stage's slacks."""
+        return slice(0, 1)
+
+    @property
+    def rear_polygon(self) -> slice:
+        """Indices of the rear-polygon slacks within a stage's slacks."""
+        return slice(1, None)
+
+
+def slack_penalties(weights: CostWeights, n_sides: int) -> SlackPenalties:
+    """The one place the soft constraints and their penalties are laid out (both backends).
+
+    Examples
+    --------
+    >>> pen = slack_penalties(CostWeights(), 12)
+    >>> pen.linear_stage.shape, pen.linear_terminal.shape, float(pen.linear_stage[pen.corridor][0])
+    ((13,), (1,), 10000.0)
+    """
+    n_stage = 1 + n_sides
+    return SlackPenalties(
+        linear_stage=np.full(n_stage, weights.slack_l1),
+        quadratic_stage=np.full(n_stage, weights.slack_l2),
+        linear_terminal=np.full(1, weights.slack_l1),
+        quadratic_terminal=np.full(1, weights.slack_l2),
+    )
+
+
+def tracking_reference(
+    config: PlannerConfig,
+    curvature_1pm: np.ndarray,
+    mu_hat: np.ndarray,
+    mode: str,
+    speed_mps: float,
+    reference_speed_mps: float,
+    reference_d_m: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares reference ``yref (N+1, 9)`` over ``[x; u]`` and its weights ``(9,)``.
+
+    Parameters
+    ----------
+    config
+        Planner configuration (weights, horizon, ``dt``, minimal-risk deceleration).
+    curvature_1pm, mu_hat
+        Per stage 0..N−1 (from :func:`stage_parameters`).
+    mode
+        ``cruise``: track ``reference_speed_mps``; ``evade``: the same target with the light
+        ``evade_speed`` weight (the caller caps it at the current speed); ``emergency``: speed 0
+        with the heavy ``emergency_speed`` weight (stop short); ``minimal_risk``: a speed profile
+        falling from ``speed_mps`` at ``minimal_risk_decel_fraction · μ̂_k · g`` to 0.
+    speed_mps
+        Current speed [m/s] (start of the minimal-risk profile).
+    reference_speed_mps, reference_d_m
+        Cruise speed and lateral offset (the lane centre) targets.
+
+    Returns
+    -------
+    yref, weights
+        Weights are the diagonal of ``W`` (acados multiplies stage terms by ``dt``).
+    """
+    w = config.weights
+    n = config.horizon_steps
+    f_w = w.force_per_kn * 1e-6
+    v = np.full(n + 1, float(reference_speed_mps))
+    speed_w = w.speed
+    if mode == "emergency":
+        speed_w, v[:] = w.emergency_speed, 0.0
+    elif mode == "evade":
+        speed_w = w.evade_speed
+    elif mode == "minimal_risk":
+        decel = config.minimal_risk_decel_fraction * np.asarray(mu_hat, float) * GRAVITY_MPS2
+        v[0] = max(float(speed_mps), 0.0)
+        for k in range(n):
+            v[k + 1] = max(v[k] - decel[k] * config.dt_s, 0.0)
+    weights = np.zeros(N_STATES + N_INPUTS)
+    weights[State.d] = w.lateral_offset
+    weights[State.dpsi] = w.heading_error
+    weights[State.psidot] = w.yaw_rate
+    weights[State.vx] = speed_w
+    weights[State.vy] = w.lateral_speed
+    weights[N_STATES + Input.fyf] = weights[N_STATES + Input.fxf] = f_w
+    weights[N_STATES + Input.fxr] = f_w
+    yref = np.zeros((n + 1, N_STATES + N_INPUTS))
+    yref[:, State.d] = reference_d_m
+    yref[:, State.vx] = v
+    kappa = np.append(curvature_1pm, curvature_1pm[-1])
+    # In a curve of curvature κ the steady yaw rate is κ v.
+    yref[:, State.psidot] = kappa * v
+    return yref, weights

@@ -1,9 +1,12 @@
 """Traction-adaptive MPC planner (Svensson & Törngren, Sec. II; TAMP framework).
 
 Each :meth:`TractionAdaptivePlanner.step` shifts the previous plan, evaluates the per-stage friction
-estimate, normal loads and rear stiffness at the guess's predicted positions, builds the lateral
-corridor and runs one real-time iteration. A failed or non-finite solve keeps the shifted plan,
-is counted and logged, and never raises.
+estimate (sanitised, see :mod:`mufusion.planner.safeguards`), normal loads and rear stiffness at the
+guess's predicted positions, builds the lateral corridor and runs one real-time iteration. A solve
+that fails, raises, or returns a non-finite or implausible solution keeps the shifted plan, is
+counted and logged, re-initialises the solver, and never raises. After
+``PlannerConfig.max_consecutive_fallbacks`` such steps in a row the caller should switch to
+``mode="minimal_risk"`` (:mod:`mufusion.planner.minimal_risk`).
 """
 
 from __future__ import annotations
@@ -11,18 +14,23 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
+from mufusion.planner.backend import PlannerBackend
+from mufusion.planner.minimal_risk import minimal_risk_rollout
 from mufusion.planner.ocp import (
+    PLANNER_MODES,
     CostWeights,
     PlannerConfig,
+    PlannerMode,
     PlannerObstacle,
     lateral_corridor,
     stage_parameters,
+    tracking_reference,
 )
+from mufusion.planner.plan import FallbackReason, Plan
+from mufusion.planner.safeguards import FrictionProfile, SanitizedFriction, check_solution
 from mufusion.planner.sampling import (
     SHIFTED_DISCOUNT,
     VIOLATION_WEIGHT,
@@ -42,28 +50,15 @@ from mufusion.vehicle.planner_model import (
 
 _log = logging.getLogger(__name__)
 
-__all__ = ["CostWeights", "Plan", "PlannerConfig", "PlannerObstacle", "TractionAdaptivePlanner"]
-
-
-@dataclass(frozen=True)
-class Plan:
-    """One planning step's result (stage k at time ``t0_s + k·dt``)."""
-
-    t0_s: float
-    states: np.ndarray
-    inputs: np.ndarray
-    rear_lateral_force_n: np.ndarray
-    mu_hat: np.ndarray
-    normal_load_front_n: np.ndarray
-    normal_load_rear_n: np.ndarray
-    force_limit_front_n: np.ndarray
-    force_limit_rear_n: np.ndarray
-    status: int
-    ok: bool
-    fallback: bool
-    solve_time_s: float
-    sampled_reinit: bool = False
-    dt_s: float = 0.1
+__all__ = [
+    "CostWeights",
+    "FallbackReason",
+    "Plan",
+    "PlannerConfig",
+    "PlannerObstacle",
+    "TractionAdaptivePlanner",
+    "rollout",
+]
 
 
 def rollout(
@@ -82,32 +77,75 @@ def rollout(
     return np.stack(xs)
 
 
+def _default_backend(params: VehicleParams, config: PlannerConfig) -> PlannerBackend:
+    if config.backend == "acados":
+        try:
+            from mufusion.planner.acados_backend import AcadosBackend
+
+            return AcadosBackend(params, config)
+        except Exception as exc:  # any build/load failure → reference backend
+            _log.warning("acados unavailable (%s); falling back to the CasADi backend", exc)
+    from mufusion.planner.casadi_backend import CasadiBackend
+
+    return CasadiBackend(params, config)
+
+
 class TractionAdaptivePlanner:
-    """Real-time traction-adaptive planner; keeps the warm start between calls."""
+    """Real-time traction-adaptive planner; keeps the warm start between calls.
+
+    Parameters
+    ----------
+    params
+        Vehicle parameters.
+    config
+        Planner configuration (default :class:`PlannerConfig`).
+    sampling
+        Sampling augmentation of the initial guess (default :class:`SamplingConfig`).
+    backend
+        The OCP solver; default: acados RTI for ``config.backend == "acados"`` (CasADi + IPOPT
+        if acados cannot be loaded), else CasADi + IPOPT. Any object implementing
+        :class:`~mufusion.planner.backend.PlannerBackend` (e.g. one that injects faults) works.
+    """
 
     def __init__(
         self,
         params: VehicleParams,
         config: PlannerConfig | None = None,
         sampling: SamplingConfig | None = None,
+        backend: PlannerBackend | None = None,
     ) -> None:
         self.params = params
         self.config = config or PlannerConfig()
-        self.failures = 0
         self.sampling = sampling or SamplingConfig()
+        self.failures = 0
+        self._consecutive_fallbacks = 0
         self._prev: Plan | None = None
-        self._backend = None
-        if self.config.backend == "acados":
-            try:
-                from mufusion.planner.acados_backend import AcadosBackend
+        self._mu_profile: FrictionProfile | None = None
+        self._backend = backend if backend is not None else _default_backend(params, self.config)
 
-                self._backend = AcadosBackend(params, self.config)
-            except Exception as exc:  # any build/load failure → reference backend
-                _log.warning("acados unavailable (%s); falling back to the CasADi backend", exc)
-        if self._backend is None:
-            from mufusion.planner.casadi_backend import CasadiBackend
+    @property
+    def backend(self) -> PlannerBackend:
+        """The OCP solver in use."""
+        return self._backend
 
-            self._backend = CasadiBackend(params, self.config)
+    @property
+    def consecutive_fallbacks(self) -> int:
+        """Planning steps in a row, up to the latest, without a usable solution."""
+        return self._consecutive_fallbacks
+
+    @property
+    def last_plan(self) -> Plan | None:
+        """The latest plan (the next step's warm start), or ``None`` after :meth:`reset`."""
+        return self._prev
+
+    def reset(self) -> None:
+        """Forget the warm start, the last friction profile and the failure counters, and
+        re-initialise the solver (its iterates and memory). The next step is a cold start."""
+        self._prev = None
+        self._mu_profile = None
+        self.failures = 0
+        self._consecutive_fallbacks = 0
+        self._backend.reset()
 
     # -- the guess ------------------------------------------------------------------------------
     def _initial_guess(self, x0: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -136,7 +174,7 @@ class TractionAdaptivePlanner:
         curvature_of_s: Callable[[np.ndarray], np.ndarray],
         mu_hat_of_s: Callable[[np.ndarray], np.ndarray],
         obstacles: Sequence[PlannerObstacle] = (),
-        mode: Literal["cruise", "evade", "emergency"] = "cruise",
+        mode: PlannerMode = "cruise",
         reference_speed_mps: float = 10.0,
         reference_d_m: float = 0.0,
         lane_d_min_m: float | None = None,
@@ -152,12 +190,17 @@ class TractionAdaptivePlanner:
             Time of ``x0`` [s]; stage k of the plan is at ``t_s + k·dt``.
         curvature_of_s, mu_hat_of_s
             Road curvature [1/m] and friction estimate [-] as functions of absolute progress [m].
+            μ̂ is sanitised (non-finite, ≤ 0 or out-of-range values; a source that raises), see
+            :mod:`mufusion.planner.safeguards`.
         obstacles
             :class:`PlannerObstacle` (or ``(s_m, d_m, length_m, width_m)`` tuples).
         mode
             ``"cruise"`` (track speed and offset), ``"evade"`` (obstacles ahead: speed is
             held at most at its current value with a light weight, so the tires' friction goes to
-            the lateral manoeuvre rather than to regaining speed) or ``"emergency"`` (stop short).
+            the lateral manoeuvre rather than to regaining speed), ``"emergency"`` (stop as short
+            as the friction allows) or ``"minimal_risk"`` (brake to a stop at
+            ``minimal_risk_decel_fraction · μ̂ g`` holding ``reference_d_m``, the lane centre;
+            falls back to a solver-free roll-out, see :mod:`mufusion.planner.minimal_risk`).
         reference_speed_mps, reference_d_m
             Cruise references.
         lane_d_min_m, lane_d_max_m
@@ -176,8 +219,8 @@ class TractionAdaptivePlanner:
         x0 = np.asarray(x0, dtype=float)
         if x0.shape != (N_STATES,) or not np.all(np.isfinite(x0)):
             raise ValueError(f"x0 must be a finite array of shape (6,), got {x0!r}")
-        if mode not in ("cruise", "evade", "emergency"):
-            raise ValueError(f"mode must be 'cruise', 'evade' or 'emergency', got {mode!r}")
+        if mode not in PLANNER_MODES:
+            raise ValueError(f"mode must be one of {list(PLANNER_MODES)}, got {mode!r}")
         if mode == "evade":
             reference_speed_mps = min(reference_speed_mps, float(x0[State.vx]))
         cfg, par = self.config, self.params
@@ -187,65 +230,92 @@ class TractionAdaptivePlanner:
             o if isinstance(o, PlannerObstacle) else PlannerObstacle(*map(float, o))
             for o in obstacles
         ]
+        mu_of_s = SanitizedFriction(mu_hat_of_s, self._mu_profile, cfg.mu_floor)
         started = time.perf_counter()
-        guess_x, guess_u = self._initial_guess(x0, t_s)
         sampled = False
-        if cfg.use_sampling:
-            v_ref = 0.0 if mode == "emergency" else reference_speed_mps
-            guess_x, guess_u, sampled = self._sample(
-                x0, guess_x, guess_u, curvature_of_s, mu_hat_of_s, obstacles, v_ref,
-                reference_d_m, lo_lane, hi_lane,
+        if mode == "minimal_risk":
+            guess_x, guess_u = minimal_risk_rollout(
+                x0, reference_d_m, curvature_of_s, mu_of_s, par, cfg, self.sampling
             )
+        else:
+            guess_x, guess_u = self._initial_guess(x0, t_s)
+            if cfg.use_sampling:
+                v_ref = 0.0 if mode == "emergency" else reference_speed_mps
+                guess_x, guess_u, sampled = self._sample(
+                    x0, guess_x, guess_u, curvature_of_s, mu_of_s, obstacles, v_ref,
+                    reference_d_m, lo_lane, hi_lane,
+                )
         # One real-time iteration per step; a cold start has no converged plan to iterate from,
         # so it takes a few (re-linearised at each iterate, as the next steps would).
         iterations = 1 if self._prev is not None else cfg.cold_start_iterations
+        braking = mode in ("emergency", "minimal_risk")
         xs, us = guess_x, guess_u
+        reason = FallbackReason.NONE
         for _ in range(iterations):
             guess_x, guess_u = xs, us
-            stage = stage_parameters(
-                guess_x, guess_u, curvature_of_s, mu_hat_of_s, par, cfg.utilization_factor
-            )
+            stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
+                                     cfg.utilization_factor)
             d_lo, d_hi = lateral_corridor(
                 guess_x, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m,
                 curvature_of_s(guess_x[1:, State.s]),
             )
-            yref, weights = self._reference(stage["curvature"], mode, reference_speed_mps,
-                                            reference_d_m)
+            yref, weights = tracking_reference(
+                cfg, stage["curvature"], stage["mu_hat"], mode, float(x0[State.vx]),
+                reference_speed_mps, reference_d_m,
+            )
             status = -1
             try:
                 status, xs, us = self._backend.solve(
                     x0, guess_x, guess_u, stage["p"], yref, weights, d_lo, d_hi,
-                    0.0 if mode == "emergency" else cfg.min_speed_mps,
+                    0.0 if braking else cfg.min_speed_mps,
                     # No traction while evading or stopping: the rear tires' friction is kept
                     # for lateral force and braking. In cruise, traction is capped at a heavy
                     # vehicle's acceleration, not at the friction limit: regaining speed at the
                     # limit after an evasion leaves the driven axle no lateral reserve.
                     par.mass_kg * cfg.max_cruise_accel_mps2 if mode == "cruise" else 0.0,
                 )
-                good = status in (0, 2) and np.all(np.isfinite(xs)) and np.all(np.isfinite(us))
+                if status not in (0, 2):
+                    reason = FallbackReason.SOLVER_STATUS
+                else:
+                    reason = check_solution(xs, us, stage, d_lo, d_hi, par, cfg.polygon_sides,
+                                            cfg.plausibility)
             except Exception as exc:  # never raise inside the loop
                 _log.warning("planner backend raised %r", exc)
-                good = False
-            if not good:
+                reason = FallbackReason.EXCEPTION
+            if reason is not FallbackReason.NONE:
                 break
-        fallback = False
-        if not good:
+        good = reason is FallbackReason.NONE
+        if good:
+            self._consecutive_fallbacks = 0
+        else:
             self.failures += 1
-            fallback = True
-            _log.warning("planner solve failed (status %s, %d failures so far); keeping the "
-                         "shifted plan", status, self.failures)
+            self._consecutive_fallbacks += 1
+            _log.warning("planner solve failed (%s, status %s; %d in a row, %d so far); keeping "
+                         "the %s plan", reason.value, status, self._consecutive_fallbacks,
+                         self.failures, "minimal-risk" if mode == "minimal_risk" else "shifted")
             xs, us = guess_x, guess_u
+            self._reinitialise_backend()
         fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], par)
         plan = Plan(
             t0_s=float(t_s), states=xs, inputs=us, rear_lateral_force_n=np.asarray(fyr),
             mu_hat=stage["mu_hat"], normal_load_front_n=stage["fzf"],
             normal_load_rear_n=stage["fzr"], force_limit_front_n=stage["radius_front"],
-            force_limit_rear_n=stage["radius_rear"], status=int(status), ok=bool(good),
-            fallback=fallback, solve_time_s=time.perf_counter() - started,
-            sampled_reinit=sampled, dt_s=cfg.dt_s,
+            force_limit_rear_n=stage["radius_rear"], status=int(status), ok=good,
+            fallback=not good, solve_time_s=time.perf_counter() - started,
+            sampled_reinit=sampled, dt_s=cfg.dt_s, fallback_reason=reason,
+            consecutive_fallbacks=self._consecutive_fallbacks,
+            mu_sanitized_stages=mu_of_s.last_count, mode=mode,
         )
         self._prev = plan
+        self._mu_profile = FrictionProfile.from_stages(guess_x[:-1, State.s], stage["mu_hat"])
         return plan
+
+    def _reinitialise_backend(self) -> None:
+        # A failed QP can leave NaN multipliers that poison every later RTI step.
+        try:
+            self._backend.reset()
+        except Exception as exc:  # never raise inside the loop
+            _log.warning("planner backend reset raised %r", exc)
 
     def _sample(self, x0, guess_x, guess_u, curvature_of_s, mu_hat_of_s, obstacles, v_ref, d_ref,
                 lo_lane, hi_lane):
@@ -279,23 +349,3 @@ class TractionAdaptivePlanner:
         except Exception as exc:  # sampling is an aid; never let it break the loop
             _log.warning("sampling augmentation failed: %r", exc)
             return guess_x, guess_u, False
-
-    def _reference(self, curvature: np.ndarray, mode: str, v_ref: float, d_ref: float):
-        w: CostWeights = self.config.weights
-        n = self.config.horizon_steps
-        f_w = w.force_per_kn * 1e-6
-        speed_w, v = {
-            "emergency": (w.emergency_speed, 0.0),
-            "evade": (w.evade_speed, v_ref),
-        }.get(mode, (w.speed, v_ref))
-        weights = np.array([0.0, w.lateral_offset, w.heading_error, w.yaw_rate, speed_w,
-                            w.lateral_speed, f_w, f_w, f_w])
-        yref = np.zeros((n + 1, N_STATES + N_INPUTS))
-        yref[:, State.d] = d_ref
-        yref[:, State.vx] = v
-        kappa = np.append(curvature, curvature[-1])
-        # In a curve of curvature κ the steady yaw rate is κ v.
-        yref[:, State.psidot] = kappa * v
-        return yref, weights
-
-

@@ -72,6 +72,47 @@ def tracking_cost(states: np.ndarray, v_ref: float, d_ref: float) -> np.ndarray:
     return ((x[:, State.vx] - v_ref) ** 2 + 0.5 * (x[:, State.d] - d_ref) ** 2).sum(axis=0)
 
 
+def steering_force_n(
+    x: np.ndarray,
+    d_target_m: np.ndarray | float,
+    curvature_1pm: np.ndarray | float,
+    speed_mps: np.ndarray | float,
+    params: VehicleParams,
+    config: SamplingConfig,
+) -> np.ndarray:
+    """Front lateral force [N] of the roll-outs' steering law (before friction saturation).
+
+    Pure pursuit of ``d_target_m`` at a speed-dependent look-ahead gives a desired heading error;
+    the desired yaw rate follows the path's curvature plus a heading correction; the force is the
+    steady share of the front axle plus a yaw-rate correction. ``speed_mps`` is already floored.
+    """
+    m, lf, iz = params.mass_kg, params.cog_to_front_axle_m, params.yaw_inertia_kgm2
+    share_front = params.cog_to_rear_axle_m / params.wheelbase_m
+    v = speed_mps
+    lookahead = np.maximum(config.min_lookahead_m, config.lookahead_time_s * v)
+    dpsi_des = np.arctan2(d_target_m - x[State.d], lookahead)
+    r_des = curvature_1pm * v + config.heading_gain_1_per_s * (dpsi_des - x[State.dpsi])
+    return share_front * m * v * r_des + iz / lf * config.yaw_rate_gain_1_per_s * (
+        r_des - x[State.psidot]
+    )
+
+
+def rk4_step(
+    x: np.ndarray,
+    u: np.ndarray,
+    curvature_1pm: np.ndarray | float,
+    rear_stiffness: np.ndarray | float,
+    params: VehicleParams,
+    dt_s: float,
+) -> np.ndarray:
+    """One classical RK4 step of the planner's model (as acados' ERK with one stage)."""
+    k1 = frenet_bicycle_dynamics(x, u, curvature_1pm, rear_stiffness, params)
+    k2 = frenet_bicycle_dynamics(x + 0.5 * dt_s * k1, u, curvature_1pm, rear_stiffness, params)
+    k3 = frenet_bicycle_dynamics(x + 0.5 * dt_s * k2, u, curvature_1pm, rear_stiffness, params)
+    k4 = frenet_bicycle_dynamics(x + dt_s * k3, u, curvature_1pm, rear_stiffness, params)
+    return x + dt_s / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+
 def candidate_rollouts(
     x0: np.ndarray,
     lateral_targets_m: np.ndarray,
@@ -95,9 +136,8 @@ def candidate_rollouts(
     m_count = d_t.size
     x = np.repeat(np.asarray(x0, dtype=float)[:, None], m_count, axis=1)
     lower, upper = longitudinal_force_bounds_n(params)
-    m, lf, lr, iz = (params.mass_kg, params.cog_to_front_axle_m, params.cog_to_rear_axle_m,
-                     params.yaw_inertia_kgm2)
-    share_front = lr / params.wheelbase_m
+    m = params.mass_kg
+    share_front = params.cog_to_rear_axle_m / params.wheelbase_m
     xs, us = [x], []
     ax = np.zeros(m_count)
     for _ in range(horizon_steps):
@@ -106,12 +146,7 @@ def candidate_rollouts(
         mu = np.asarray(mu_hat_of_s(x[State.s]), dtype=float) * np.ones(m_count)
         fzf, fzr = normal_loads_n(ax, params)
         c_r = rear_cornering_stiffness_n_per_rad(params, fzr, utilization_factor)
-        lookahead = np.maximum(config.min_lookahead_m, config.lookahead_time_s * v)
-        dpsi_des = np.arctan2(d_t - x[State.d], lookahead)
-        r_des = kappa * v + config.heading_gain_1_per_s * (dpsi_des - x[State.dpsi])
-        fyf = share_front * m * v * r_des + iz / lf * config.yaw_rate_gain_1_per_s * (
-            r_des - x[State.psidot]
-        )
+        fyf = steering_force_n(x, d_t, kappa, v, params, config)
         f_long = m * config.speed_gain_1_per_s * (v_t - x[State.vx])
         fxf = np.where(f_long < 0.0, share_front * f_long, 0.0)
         fxr = np.where(f_long < 0.0, (1.0 - share_front) * f_long, f_long)
@@ -126,11 +161,7 @@ def candidate_rollouts(
         fyf = np.clip(fyf, -lat_room, lat_room)
         u = np.stack([fyf, fxf, fxr])
         u[Input.fyf], u[Input.fxf], u[Input.fxr] = fyf, fxf, fxr
-        k1 = frenet_bicycle_dynamics(x, u, kappa, c_r, params)
-        k2 = frenet_bicycle_dynamics(x + 0.5 * dt_s * k1, u, kappa, c_r, params)
-        k3 = frenet_bicycle_dynamics(x + 0.5 * dt_s * k2, u, kappa, c_r, params)
-        k4 = frenet_bicycle_dynamics(x + dt_s * k3, u, kappa, c_r, params)
-        x = x + dt_s / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        x = rk4_step(x, u, kappa, c_r, params, dt_s)
         x[State.vx] = np.maximum(x[State.vx], 0.0)
         ax = (fxf + fxr) / m
         xs.append(x)

@@ -6,218 +6,101 @@ A dynamic bicycle in Cartesian coordinates with
 * the combined-slip Magic Formula tire of :mod:`mufusion.vehicle.tires`, whose peak is μ F_z with
   the true μ under each axle and whose stiffness does not depend on μ,
 * quasi-static longitudinal load transfer from the current acceleration (solved in closed form,
-  see :func:`_axle_forces`),
+  see :mod:`mufusion.vehicle.axles`),
 * a first-order, rate-limited steering servo and first-order wheel-torque lags.
 
-Low speed: slip ratio and slip angle divide by ``max(|u|, SLIP_SPEED_FLOOR_MPS)``, so below
-1 m/s the tires act as stiff viscous dampers and the vehicle comes to rest without a singularity;
-brakes act as Coulomb friction on the wheel (they stop it, they never spin it backwards). The
+Brakes act as Coulomb friction on the wheel (they stop it, they never spin it backwards). The
 vehicle does not reverse.
 
-State vector: :class:`PlantState`. Input: :class:`~mufusion.vehicle.actuators.ActuatorCommand`
-(or an array ``[steer_rad, torque_front_nm, torque_rear_nm]``).
+State: :class:`~mufusion.vehicle.plant_state.PlantState` (array indices) and
+:class:`~mufusion.vehicle.plant_state.PlantStateVector` (named floats). Input:
+:class:`~mufusion.vehicle.actuators.ActuatorCommand` (or an array
+``[steer_rad, torque_front_nm, torque_rear_nm]``).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from enum import IntEnum
 from typing import Any
 
 import numpy as np
 
 from mufusion.vehicle.actuators import ActuatorCommand
-from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
+from mufusion.vehicle.axles import (
+    SLIP_SPEED_FLOOR_MPS,
+    AxleOutput,
+    axle_forces,
+    axle_outputs,
+    check_mu,
+    wheel_speeds,
+)
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.plant_state import (
+    N_PLANT_STATES,
+    PlantState,
+    PlantStateVector,
+    axle_positions,
+    initial_state,
+    state_vector,
+)
 from mufusion.vehicle.tires import tire_forces_scalar
 
-# Slip quantities divide by at least this speed [m/s] (the issue's "regularise below ~1 m/s").
-SLIP_SPEED_FLOOR_MPS = 1.0
+__all__ = [
+    "BRAKE_SIGN_SMOOTHING_RADPS",
+    "DEFAULT_DT_S",
+    "N_PLANT_STATES",
+    "SLIP_SPEED_FLOOR_MPS",
+    "AxleOutput",
+    "Plant",
+    "PlantOutput",
+    "PlantState",
+    "PlantStateVector",
+    "axle_forces",
+    "axle_positions",
+    "initial_state",
+    "plant_derivative",
+]
+
 # In the pure derivative the brake torque opposes ω through sat(ω / this) [rad/s]; the stepping
 # scheme of :class:`Plant` treats the brake as exact Coulomb friction instead.
 BRAKE_SIGN_SMOOTHING_RADPS = 0.5
 DEFAULT_DT_S = 1.0 / 200.0
-
-
-class PlantState(IntEnum):
-    """Indices of the plant state vector (SI units, radians)."""
-
-    X = 0  # CoG position, east [m]
-    Y = 1  # CoG position, north [m]
-    PSI = 2  # yaw angle [rad], counter-clockwise from X
-    VX = 3  # longitudinal body velocity [m/s]
-    VY = 4  # lateral body velocity [m/s], left positive
-    YAW_RATE = 5  # [rad/s]
-    OMEGA_FRONT = 6  # front wheel spin [rad/s]
-    OMEGA_REAR = 7  # rear wheel spin [rad/s]
-    STEER = 8  # front road-wheel angle [rad]
-    TORQUE_FRONT = 9  # applied front wheel torque [N m], braking negative
-    TORQUE_REAR = 10  # applied rear wheel torque [N m]
-
-
-N_PLANT_STATES = len(PlantState)
+# Step of the finite difference dF_x/dκ in the implicit wheel update [-].
+_SLIP_DIFFERENCE_STEP = 1e-5
 
 
 @dataclass(frozen=True)
 class PlantOutput:
     """Everything the controller, the estimators and the metrics may read after one plant step.
 
-    Forces are in each axle's wheel frame (``fx`` along the wheel, ``fy`` across it) [N];
-    ``fz`` are normal loads [N]. Utilisations are fractions of μ F_z of that axle: realised ones
-    are ``hypot(fx, fy) / (μ F_z)`` ≤ 1; requested ones are what a linear tire would deliver for
-    the same slip (≥ 0, exceed 1 when the tire slides). Accelerations are in the body frame
-    [m/s²] and exclude the velocity-rotation terms (what an IMU would measure).
+    ``front`` / ``rear`` hold each axle's forces in its wheel frame, normal load, slips,
+    utilisations and the μ used (:class:`~mufusion.vehicle.axles.AxleOutput`). Accelerations are
+    in the body frame [m/s²] and exclude the velocity-rotation terms (what an IMU would measure).
+    Axle positions: :func:`~mufusion.vehicle.plant_state.axle_positions` of ``x``.
     """
 
     x: np.ndarray
     time_s: float
-    utilization_front: float
-    utilization_rear: float
-    requested_utilization_front: float
-    requested_utilization_rear: float
-    fx_front_n: float
-    fy_front_n: float
-    fz_front_n: float
-    fx_rear_n: float
-    fy_rear_n: float
-    fz_rear_n: float
-    slip_angle_front_rad: float
-    slip_angle_rear_rad: float
-    slip_ratio_front: float
-    slip_ratio_rear: float
+    front: AxleOutput
+    rear: AxleOutput
     accel_x_mps2: float
     accel_y_mps2: float
-    front_axle_xy_m: tuple[float, float]
-    rear_axle_xy_m: tuple[float, float]
-    mu_front: float
-    mu_rear: float
 
     @property
     def speed_mps(self) -> float:
         """Speed of the centre of gravity [m/s]."""
         return math.hypot(self.x[PlantState.VX], self.x[PlantState.VY])
 
+    @property
+    def utilization_front(self) -> float:
+        """Realised utilisation of the front axle, ``front.utilization``."""
+        return self.front.utilization
 
-@dataclass(frozen=True)
-class AxleForces:
-    """Tire forces and slips of both axles at one state (wheel frames; N, rad, -).
-
-    ``used_*`` / ``asked_*`` are the realised / requested utilisations, ``speed_*`` the wheel
-    centre's speed along the wheel and ``den_*`` the (floored) speed the slips divide by.
-    """
-
-    fxf: float
-    fyf: float
-    fzf: float
-    fxr: float
-    fyr: float
-    fzr: float
-    kappa_f: float
-    alpha_f: float
-    kappa_r: float
-    alpha_r: float
-    used_f: float
-    asked_f: float
-    used_r: float
-    asked_r: float
-    speed_f: float
-    speed_r: float
-    den_f: float
-    den_r: float
-
-
-def _check_mu(mu_front: float, mu_rear: float) -> None:
-    if not (mu_front > 0.0 and math.isfinite(mu_front)):
-        raise ValueError(f"mu_front must be a finite number > 0, got {mu_front!r}")
-    if not (mu_rear > 0.0 and math.isfinite(mu_rear)):
-        raise ValueError(f"mu_rear must be a finite number > 0, got {mu_rear!r}")
-
-
-def _wheel_speeds(vx: float, vy: float, yaw_rate: float, steer: float, p: VehicleParams):
-    """Velocity of each wheel centre in its own frame: (u_f, w_f, u_r, w_r) [m/s]."""
-    lateral_f = vy + p.cog_to_front_axle_m * yaw_rate
-    cos_d, sin_d = math.cos(steer), math.sin(steer)
-    u_f = vx * cos_d + lateral_f * sin_d
-    w_f = -vx * sin_d + lateral_f * cos_d
-    return u_f, w_f, vx, vy - p.cog_to_rear_axle_m * yaw_rate
-
-
-def _axle_forces(
-    vx: float,
-    vy: float,
-    yaw_rate: float,
-    steer: float,
-    omega_f: float,
-    omega_r: float,
-    mu_f: float,
-    mu_r: float,
-    p: VehicleParams,
-) -> AxleForces:
-    u_f, w_f, u_r, w_r = _wheel_speeds(vx, vy, yaw_rate, steer, p)
-    radius = p.wheel_radius_m
-    den_f = max(abs(u_f), SLIP_SPEED_FLOOR_MPS)
-    den_r = max(abs(u_r), SLIP_SPEED_FLOOR_MPS)
-    kappa_f = (radius * omega_f - u_f) / den_f
-    kappa_r = (radius * omega_r - u_r) / den_r
-    alpha_f = -math.atan(w_f / den_f)
-    alpha_r = -math.atan(w_r / den_r)
-    # Forces per unit load: slip does not depend on F_z and the tire scales linearly with it.
-    gxf, gyf, used_f, asked_f = tire_forces_scalar(kappa_f, alpha_f, 1.0, mu_f, p.tire)
-    gxr, gyr, used_r, asked_r = tire_forces_scalar(kappa_r, alpha_r, 1.0, mu_r, p.tire)
-    # Quasi-static pitch load transfer: m a = F_zf g_f + F_zr g_r with
-    # F_zf = m (g l_r − a h)/L, F_zr = m (g l_f + a h)/L, solved for a in closed form.
-    lf, lr, h = p.cog_to_front_axle_m, p.cog_to_rear_axle_m, p.cog_height_m
-    wheelbase = lf + lr
-    g_front = gxf * math.cos(steer) - gyf * math.sin(steer)
-    denominator = max(wheelbase + h * (g_front - gxr), 0.1 * wheelbase)
-    accel = GRAVITY_MPS2 * (g_front * lr + gxr * lf) / denominator
-    weight = p.mass_kg / wheelbase
-    fzf = max(weight * (GRAVITY_MPS2 * lr - accel * h), 0.0)
-    fzr = max(weight * (GRAVITY_MPS2 * lf + accel * h), 0.0)
-    return AxleForces(
-        fxf=gxf * fzf,
-        fyf=gyf * fzf,
-        fzf=fzf,
-        fxr=gxr * fzr,
-        fyr=gyr * fzr,
-        fzr=fzr,
-        kappa_f=kappa_f,
-        alpha_f=alpha_f,
-        kappa_r=kappa_r,
-        alpha_r=alpha_r,
-        used_f=used_f if fzf > 0.0 else 0.0,
-        asked_f=asked_f if fzf > 0.0 else 0.0,
-        used_r=used_r if fzr > 0.0 else 0.0,
-        asked_r=asked_r if fzr > 0.0 else 0.0,
-        speed_f=u_f,
-        speed_r=u_r,
-        den_f=den_f,
-        den_r=den_r,
-    )
-
-
-def axle_forces(
-    x: np.ndarray, mu_front: float, mu_rear: float, params: VehicleParams
-) -> AxleForces:
-    """Tire forces, slips and utilisations of both axles at plant state ``x``.
-
-    Parameters
-    ----------
-    x
-        Plant state, shape ``(11,)``.
-    mu_front, mu_rear
-        True road friction under each axle [-], > 0.
-    params
-        Vehicle parameters.
-
-    Raises
-    ------
-    ValueError
-        If a μ is not > 0 or ``x`` has the wrong shape.
-    """
-    _check_mu(mu_front, mu_rear)
-    s = _validate_state(x).tolist()
-    return _axle_forces(s[3], s[4], s[5], s[8], s[6], s[7], mu_front, mu_rear, params)
+    @property
+    def utilization_rear(self) -> float:
+        """Realised utilisation of the rear axle, ``rear.utilization``."""
+        return self.rear.utilization
 
 
 def _command_tuple(command: Any, params: VehicleParams) -> tuple[float, float, float]:
@@ -234,42 +117,47 @@ def _command_tuple(command: Any, params: VehicleParams) -> tuple[float, float, f
 
 
 def _chassis_rates(
-    x: list[float] | tuple[float, ...] | np.ndarray,
-    forces: AxleForces,
+    x: PlantStateVector,
+    front: AxleOutput,
+    rear: AxleOutput,
     command: tuple[float, float, float],
     p: VehicleParams,
-) -> list[float]:
-    """Derivatives of every state except the wheel speeds (returned as 0)."""
-    psi, vx, vy, yaw_rate, steer = x[2], x[3], x[4], x[5], x[8]
-    cos_d, sin_d = math.cos(steer), math.sin(steer)
-    fx_front_body = forces.fxf * cos_d - forces.fyf * sin_d
-    fy_front_body = forces.fxf * sin_d + forces.fyf * cos_d
+    omega_front_rate: float = 0.0,
+    omega_rear_rate: float = 0.0,
+) -> PlantStateVector:
+    """Time derivative of ``x``; the wheel-spin rates are given (the plant treats them apart)."""
+    cos_d, sin_d = math.cos(x.steer_rad), math.sin(x.steer_rad)
+    fx_front_body = front.fx_n * cos_d - front.fy_n * sin_d
+    fy_front_body = front.fx_n * sin_d + front.fy_n * cos_d
     m = p.mass_kg
-    cos_p, sin_p = math.cos(psi), math.sin(psi)
+    vx, vy, yaw_rate = x.vx_mps, x.vy_mps, x.yaw_rate_radps
+    cos_p, sin_p = math.cos(x.psi_rad), math.sin(x.psi_rad)
     steer_cmd, torque_f_cmd, torque_r_cmd = command
-    steer_rate = (steer_cmd - steer) / p.steer_time_constant_s
+    steer_rate = (steer_cmd - x.steer_rad) / p.steer_time_constant_s
     steer_rate = min(max(steer_rate, -p.max_steer_rate_radps), p.max_steer_rate_radps)
-    return [
-        vx * cos_p - vy * sin_p,
-        vx * sin_p + vy * cos_p,
-        yaw_rate,
-        (fx_front_body + forces.fxr) / m + vy * yaw_rate,
-        (fy_front_body + forces.fyr) / m - vx * yaw_rate,
-        (p.cog_to_front_axle_m * fy_front_body - p.cog_to_rear_axle_m * forces.fyr)
+    return PlantStateVector(
+        x_m=vx * cos_p - vy * sin_p,
+        y_m=vx * sin_p + vy * cos_p,
+        psi_rad=yaw_rate,
+        vx_mps=(fx_front_body + rear.fx_n) / m + vy * yaw_rate,
+        vy_mps=(fy_front_body + rear.fy_n) / m - vx * yaw_rate,
+        yaw_rate_radps=(p.cog_to_front_axle_m * fy_front_body - p.cog_to_rear_axle_m * rear.fy_n)
         / p.yaw_inertia_kgm2,
-        0.0,
-        0.0,
-        steer_rate,
-        (torque_f_cmd - x[9]) / p.torque_time_constant_s,
-        (torque_r_cmd - x[10]) / p.torque_time_constant_s,
-    ]
+        omega_front_radps=omega_front_rate,
+        omega_rear_radps=omega_rear_rate,
+        steer_rad=steer_rate,
+        torque_front_nm=(torque_f_cmd - x.torque_front_nm) / p.torque_time_constant_s,
+        torque_rear_nm=(torque_r_cmd - x.torque_rear_nm) / p.torque_time_constant_s,
+    )
 
 
-def _validate_state(x: Any) -> np.ndarray:
-    arr = np.asarray(x, dtype=float)
-    if arr.shape != (N_PLANT_STATES,):
-        raise ValueError(f"x must have shape ({N_PLANT_STATES},), got {arr.shape}")
-    return arr
+def _smoothed_wheel_rate(
+    omega: float, torque: float, axle: AxleOutput, p: VehicleParams
+) -> float:
+    """``I_w ω̇ = T_drive − T_brake sat(ω / 0.5 rad/s) − R F_x`` [rad/s²]."""
+    drive, brake = max(torque, 0.0), max(-torque, 0.0)
+    brake_sign = min(max(omega / BRAKE_SIGN_SMOOTHING_RADPS, -1.0), 1.0)
+    return (drive - brake * brake_sign - p.wheel_radius_m * axle.fx_n) / p.wheel_inertia_kgm2
 
 
 def plant_derivative(
@@ -312,74 +200,27 @@ def plant_derivative(
     >>> round(float(xd[PlantState.X]), 6), round(float(xd[PlantState.VX]), 6)
     (10.0, 0.0)
     """
-    _check_mu(mu_front, mu_rear)
-    state = _validate_state(x).tolist()
+    check_mu(mu_front, mu_rear)
+    state = state_vector(x)
     cmd = _command_tuple(command, params)
-    forces = _axle_forces(
-        state[3], state[4], state[5], state[8], state[6], state[7], mu_front, mu_rear, params
+    front, rear = axle_outputs(
+        state, state.omega_front_radps, state.omega_rear_radps, mu_front, mu_rear, params
     )
-    rates = _chassis_rates(state, forces, cmd, params)
-    radius, inertia = params.wheel_radius_m, params.wheel_inertia_kgm2
-    for index, torque, fx in (
-        (PlantState.OMEGA_FRONT, state[9], forces.fxf),
-        (PlantState.OMEGA_REAR, state[10], forces.fxr),
-    ):
-        omega = state[index]
-        drive, brake = max(torque, 0.0), max(-torque, 0.0)
-        brake_sign = min(max(omega / BRAKE_SIGN_SMOOTHING_RADPS, -1.0), 1.0)
-        rates[index] = (drive - brake * brake_sign - radius * fx) / inertia
+    rates = _chassis_rates(
+        state, front, rear, cmd, params,
+        omega_front_rate=_smoothed_wheel_rate(
+            state.omega_front_radps, state.torque_front_nm, front, params
+        ),
+        omega_rear_rate=_smoothed_wheel_rate(
+            state.omega_rear_radps, state.torque_rear_nm, rear, params
+        ),
+    )
     return np.asarray(rates)
 
 
-def initial_state(
-    params: VehicleParams, X: float, Y: float, psi: float, speed_mps: float
-) -> np.ndarray:
-    """A plant state driving straight at ``speed_mps`` with free-rolling wheels.
-
-    Parameters
-    ----------
-    params
-        Vehicle parameters (wheel radius).
-    X, Y
-        Position of the centre of gravity [m].
-    psi
-        Yaw angle [rad].
-    speed_mps
-        Forward speed [m/s], ≥ 0.
-
-    Raises
-    ------
-    ValueError
-        If ``speed_mps`` is negative or not finite.
-    """
-    if not (math.isfinite(speed_mps) and speed_mps >= 0.0):
-        raise ValueError(f"speed_mps must be finite and >= 0, got {speed_mps!r}")
-    x = np.zeros(N_PLANT_STATES)
-    x[PlantState.X], x[PlantState.Y], x[PlantState.PSI] = X, Y, psi
-    x[PlantState.VX] = speed_mps
-    x[PlantState.OMEGA_FRONT] = x[PlantState.OMEGA_REAR] = speed_mps / params.wheel_radius_m
-    return x
-
-
-def axle_positions(x: np.ndarray, params: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
-    """Cartesian positions of the front and rear axle centres [m].
-
-    Parameters
-    ----------
-    x
-        Plant state(s), shape ``(11, ...)``.
-    params
-        Vehicle parameters (axle distances from the CoG).
-
-    Returns
-    -------
-    front_xy, rear_xy
-        Each of shape ``(2, ...)``.
-    """
-    arr = np.asarray(x, dtype=float)
-    heading = np.stack([np.cos(arr[PlantState.PSI]), np.sin(arr[PlantState.PSI])])
-    cog = np.stack([arr[PlantState.X], arr[PlantState.Y]])
-    return cog + params.cog_to_front_axle_m * heading, cog - params.cog_to_rear_axle_m * heading
+def _follow_axle(omega0: float, speed1: float, speed0: float, radius: float) -> float:
+    """Wheel spin that keeps the slip ratio while the axle's speed goes ``speed0 → speed1``."""
+    return max(omega0 + (speed1 - speed0) / radius, 0.0) if omega0 > 0.0 else 0.0
 
 
 class Plant:
@@ -405,6 +246,14 @@ class Plant:
     ------
     ValueError
         If ``dt_s`` is not in (0, 1/200] or ``x0`` has the wrong shape.
+
+    Examples
+    --------
+    >>> from mufusion.vehicle.params import CAR
+    >>> plant = Plant(CAR, initial_state(CAR, 0.0, 0.0, 0.0, 10.0))
+    >>> out = plant.step(ActuatorCommand(0.0, 0.0, 0.0), 0.8, 0.8)
+    >>> round(out.time_s, 3), round(float(out.x[PlantState.X]), 3), out.front.utilization
+    (0.005, 0.05, 0.0)
     """
 
     def __init__(
@@ -414,29 +263,18 @@ class Plant:
             raise ValueError(f"dt_s must be in (0, {DEFAULT_DT_S}] s, got {dt_s!r}")
         self.params = params
         self.dt_s = float(dt_s)
-        self._x = _validate_state(x0).tolist()
+        self._x = state_vector(x0)
         self.time_s = 0.0
 
     @property
     def x(self) -> np.ndarray:
-        """Current state, shape ``(11,)`` (a copy)."""
+        """Current state, shape ``(11,)`` (a copy), indexed by :class:`PlantState`."""
         return np.asarray(self._x)
 
-    def _stage(
-        self,
-        x: list[float],
-        base: tuple[float, float, float, float, float],
-        cmd: tuple[float, float, float],
-        mu_f: float,
-        mu_r: float,
-    ) -> list[float]:
-        p = self.params
-        omega_f0, omega_r0, u_f0, u_r0, radius = base
-        u_f, _, u_r, _ = _wheel_speeds(x[3], x[4], x[5], x[8], p)
-        omega_f = max(omega_f0 + (u_f - u_f0) / radius, 0.0) if omega_f0 > 0.0 else 0.0
-        omega_r = max(omega_r0 + (u_r - u_r0) / radius, 0.0) if omega_r0 > 0.0 else 0.0
-        forces = _axle_forces(x[3], x[4], x[5], x[8], omega_f, omega_r, mu_f, mu_r, p)
-        return _chassis_rates(x, forces, cmd, p)
+    @property
+    def state(self) -> PlantStateVector:
+        """Current state as named floats."""
+        return self._x
 
     def step(
         self, command: ActuatorCommand | np.ndarray, mu_front: float, mu_rear: float
@@ -460,62 +298,72 @@ class Plant:
         ValueError
             If a μ is not > 0.
         """
-        _check_mu(mu_front, mu_rear)
+        check_mu(mu_front, mu_rear)
         p, dt = self.params, self.dt_s
+        radius = p.wheel_radius_m
         cmd = _command_tuple(command, p)
         x0 = self._x
-        u_f0, _, u_r0, _ = _wheel_speeds(x0[3], x0[4], x0[5], x0[8], p)
-        base = (x0[6], x0[7], u_f0, u_r0, p.wheel_radius_m)
+        u_f0, _, u_r0, _ = wheel_speeds(x0, p)
 
-        def stage(x: list[float]) -> list[float]:
-            return self._stage(x, base, cmd, mu_front, mu_rear)
+        def stage(x: PlantStateVector) -> PlantStateVector:
+            u_f, _, u_r, _ = wheel_speeds(x, p)
+            front, rear = axle_outputs(
+                x,
+                _follow_axle(x0.omega_front_radps, u_f, u_f0, radius),
+                _follow_axle(x0.omega_rear_radps, u_r, u_r0, radius),
+                mu_front, mu_rear, p,
+            )
+            return _chassis_rates(x, front, rear, cmd, p)
 
+        make = PlantStateVector._make
         k1 = stage(x0)
-        k2 = stage([a + 0.5 * dt * b for a, b in zip(x0, k1, strict=True)])
-        k3 = stage([a + 0.5 * dt * b for a, b in zip(x0, k2, strict=True)])
-        k4 = stage([a + dt * b for a, b in zip(x0, k3, strict=True)])
-        x1 = [
+        k2 = stage(make(a + 0.5 * dt * b for a, b in zip(x0, k1, strict=True)))
+        k3 = stage(make(a + 0.5 * dt * b for a, b in zip(x0, k2, strict=True)))
+        k4 = stage(make(a + dt * b for a, b in zip(x0, k3, strict=True)))
+        chassis = make(
             a + dt / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
             for a, b1, b2, b3, b4 in zip(x0, k1, k2, k3, k4, strict=True)
-        ]
-        u_f1, _, u_r1, _ = _wheel_speeds(x1[3], x1[4], x1[5], x1[8], p)
-        radius = p.wheel_radius_m
-        predicted_f = max(x0[6] + (u_f1 - u_f0) / radius, 0.0) if x0[6] > 0.0 else 0.0
-        predicted_r = max(x0[7] + (u_r1 - u_r0) / radius, 0.0) if x0[7] > 0.0 else 0.0
-        x1[6], x1[7] = self._implicit_wheels(
-            x0, x1, predicted_f, predicted_r, mu_front, mu_rear
         )
+        omega_front, omega_rear = self._implicit_wheels(x0, chassis, u_f0, u_r0, mu_front, mu_rear)
+        x1 = chassis._replace(omega_front_radps=omega_front, omega_rear_radps=omega_rear)
         self._x = x1
         self.time_s += dt
         return self._output(x1, mu_front, mu_rear)
 
     def _implicit_wheels(
         self,
-        x0: list[float],
-        x1: list[float],
-        predicted_f: float,
-        predicted_r: float,
+        x0: PlantStateVector,
+        x1: PlantStateVector,
+        u_f0: float,
+        u_r0: float,
         mu_f: float,
         mu_r: float,
     ) -> tuple[float, float]:
+        """Linearly implicit Euler step of both wheel spins at the new chassis state ``x1``."""
         p, dt = self.params, self.dt_s
         radius, inertia = p.wheel_radius_m, p.wheel_inertia_kgm2
-        forces = _axle_forces(x1[3], x1[4], x1[5], x1[8], predicted_f, predicted_r, mu_f, mu_r, p)
+        u_f1, _, u_r1, _ = wheel_speeds(x1, p)
+        predicted_f = _follow_axle(x0.omega_front_radps, u_f1, u_f0, radius)
+        predicted_r = _follow_axle(x0.omega_rear_radps, u_r1, u_r0, radius)
+        front, rear = axle_outputs(x1, predicted_f, predicted_r, mu_f, mu_r, p)
         new = []
-        for omega0, predicted, torque, fx, fz, kappa, alpha, mu, den in (
-            (x0[6], predicted_f, x1[9], forces.fxf, forces.fzf, forces.kappa_f,
-             forces.alpha_f, mu_f, forces.den_f),
-            (x0[7], predicted_r, x1[10], forces.fxr, forces.fzr, forces.kappa_r,
-             forces.alpha_r, mu_r, forces.den_r),
+        for omega0, predicted, torque, axle in (
+            (x0.omega_front_radps, predicted_f, x1.torque_front_nm, front),
+            (x0.omega_rear_radps, predicted_r, x1.torque_rear_nm, rear),
         ):
             # Tangent stiffness dF_x/dω (clamped at 0 beyond the peak) for the implicit step.
-            step = 1e-5
-            fx_plus, _, _, _ = tire_forces_scalar(kappa + step, alpha, fz, mu, p.tire)
-            slope = max((fx_plus - fx) / step, 0.0) * radius / den
+            fx_plus, _, _, _ = tire_forces_scalar(
+                axle.slip_ratio + _SLIP_DIFFERENCE_STEP, axle.slip_angle_rad, axle.fz_n, axle.mu,
+                p.tire,
+            )
+            slope = (
+                max((fx_plus - axle.fx_n) / _SLIP_DIFFERENCE_STEP, 0.0)
+                * radius / axle.slip_speed_mps
+            )
             effective = inertia + dt * radius * slope
             drive, brake = max(torque, 0.0), max(-torque, 0.0)
             free = (
-                inertia * omega0 + dt * (drive - radius * fx + radius * slope * predicted)
+                inertia * omega0 + dt * (drive - radius * axle.fx_n + radius * slope * predicted)
             ) / effective
             hold = dt * brake / effective
             if free > hold:
@@ -526,35 +374,16 @@ class Plant:
                 new.append(0.0)
         return new[0], new[1]
 
-    def _output(self, x: list[float], mu_f: float, mu_r: float) -> PlantOutput:
+    def _output(self, x: PlantStateVector, mu_f: float, mu_r: float) -> PlantOutput:
         p = self.params
-        forces = _axle_forces(x[3], x[4], x[5], x[8], x[6], x[7], mu_f, mu_r, p)
-        steer = x[8]
-        cos_d, sin_d = math.cos(steer), math.sin(steer)
+        front, rear = axle_outputs(x, x.omega_front_radps, x.omega_rear_radps, mu_f, mu_r, p)
+        cos_d, sin_d = math.cos(x.steer_rad), math.sin(x.steer_rad)
         m = p.mass_kg
-        cos_p, sin_p = math.cos(x[2]), math.sin(x[2])
-        lf, lr = p.cog_to_front_axle_m, p.cog_to_rear_axle_m
         return PlantOutput(
             x=np.asarray(x),
             time_s=self.time_s,
-            utilization_front=forces.used_f,
-            utilization_rear=forces.used_r,
-            requested_utilization_front=forces.asked_f,
-            requested_utilization_rear=forces.asked_r,
-            fx_front_n=forces.fxf,
-            fy_front_n=forces.fyf,
-            fz_front_n=forces.fzf,
-            fx_rear_n=forces.fxr,
-            fy_rear_n=forces.fyr,
-            fz_rear_n=forces.fzr,
-            slip_angle_front_rad=forces.alpha_f,
-            slip_angle_rear_rad=forces.alpha_r,
-            slip_ratio_front=forces.kappa_f,
-            slip_ratio_rear=forces.kappa_r,
-            accel_x_mps2=(forces.fxf * cos_d - forces.fyf * sin_d + forces.fxr) / m,
-            accel_y_mps2=(forces.fxf * sin_d + forces.fyf * cos_d + forces.fyr) / m,
-            front_axle_xy_m=(x[0] + lf * cos_p, x[1] + lf * sin_p),
-            rear_axle_xy_m=(x[0] - lr * cos_p, x[1] - lr * sin_p),
-            mu_front=mu_f,
-            mu_rear=mu_r,
+            front=front,
+            rear=rear,
+            accel_x_mps2=(front.fx_n * cos_d - front.fy_n * sin_d + rear.fx_n) / m,
+            accel_y_mps2=(front.fx_n * sin_d + front.fy_n * cos_d + rear.fy_n) / m,
         )

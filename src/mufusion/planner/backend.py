@@ -1,0 +1,34 @@
+"""The interface between the planner and an OCP solver."""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+
+class PlannerBackend(Protocol):
+    """What the planner needs from an OCP solver (acados RTI, CasADi reference, or a test double).
+
+    ``solve`` takes the current state, the initial guess ``(N+1, 6)`` / ``(N, 3)``, the stage
+    parameters ``(N, N_PARAMS)``, the tracking reference ``(N+1, 9)`` and its weights ``(9,)``,
+    the corridor ``(N,)`` × 2, the lowest speed and the drive-force cap; it returns
+    ``(status, states, inputs)`` with status 0 or 2 for a usable solution. It may raise.
+    ``reset`` forgets every iterate and solver memory (after a failure).
+    """
+
+    def solve(
+        self,
+        x0: np.ndarray,
+        guess_x: np.ndarray,
+        guess_u: np.ndarray,
+        p: np.ndarray,
+        yref: np.ndarray,
+        weights: np.ndarray,
+        d_lo: np.ndarray,
+        d_hi: np.ndarray,
+        min_speed_mps: float,
+        max_drive_force_n: float | None = None,
+    ) -> tuple[int, np.ndarray, np.ndarray]: ...
+
+    def reset(self) -> None: ...

@@ -1,0 +1,136 @@
+"""Minimal-risk manoeuvre: brake to a stop in lane at a declared fraction of μ̂ g.
+
+The manoeuvre a supervisor falls back to when the planner has not produced a usable solution for
+``PlannerConfig.max_consecutive_fallbacks`` steps in a row (or cannot be trusted otherwise). Its
+roll-out needs no solver: the planner's model under a braking and lane-keeping law.
+
+* Deceleration target ``a_k = minimal_risk_decel_fraction · μ̂(s_k) · g`` (default 0.5 μ̂ g),
+  never more than stops the vehicle within the step; no traction. Below 1 m/s (the planner
+  model's slip-speed floor) the vehicle is taken to rest and held there with the brakes on.
+* The braking force is split over the axles by their normal loads, and each axle's share is
+  capped at 80 % of its friction limit ``λ μ̂ F_z``, so the tires keep lateral reserve.
+* Steering: the roll-outs' law of :mod:`mufusion.planner.sampling`, towards ``reference_d_m``
+  (the lane centre) along the road's curvature, saturated at the front axle's remaining friction.
+
+In :meth:`TractionAdaptivePlanner.step` with ``mode="minimal_risk"`` this roll-out is the
+initial guess; the OCP then tracks its speed profile (corridor and friction polygons as in
+every mode), and if the solve fails or is rejected the roll-out itself is the plan.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from mufusion.planner.ocp import PlannerConfig, longitudinal_force_bounds_n
+from mufusion.planner.sampling import SamplingConfig, rk4_step, steering_force_n
+from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
+from mufusion.vehicle.planner_model import (
+    MIN_SPEED_FOR_SLIP_MPS,
+    N_INPUTS,
+    Input,
+    State,
+    normal_loads_n,
+    rear_cornering_stiffness_n_per_rad,
+)
+
+# Share of each axle's friction limit the braking force may use; the rest stays for steering.
+BRAKING_SHARE_OF_LIMIT = 0.8
+
+
+def minimal_risk_rollout(
+    x0: np.ndarray,
+    reference_d_m: float,
+    curvature_of_s: Callable[[np.ndarray], np.ndarray],
+    mu_hat_of_s: Callable[[np.ndarray], np.ndarray],
+    params: VehicleParams,
+    config: PlannerConfig,
+    sampling: SamplingConfig | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Roll out the minimal-risk manoeuvre from ``x0`` over the planner's horizon.
+
+    Parameters
+    ----------
+    x0
+        Frenet state (6,), see :class:`~mufusion.vehicle.planner_model.State`.
+    reference_d_m
+        Lateral offset to hold [m] (the lane centre).
+    curvature_of_s, mu_hat_of_s
+        Road curvature [1/m] and a finite, positive friction estimate as functions of ``s`` [m]
+        (the planner passes its sanitised estimate).
+    params
+        Vehicle parameters.
+    config
+        Planner configuration (horizon, ``dt``, utilisation factor, deceleration fraction).
+    sampling
+        Gains of the steering law (default :class:`SamplingConfig`).
+
+    Returns
+    -------
+    states, inputs
+        ``(N+1, 6)`` and ``(N, 3)``.
+
+    Examples
+    --------
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> cfg = PlannerConfig(horizon_steps=40)
+    >>> xs, us = minimal_risk_rollout(np.array([0, 0.3, 0, 0, 10.0, 0]), 0.0,
+    ...                               lambda s: 0 * s, lambda s: 0.8 + 0 * s, TRUCK, cfg)
+    >>> bool(xs[-1, State.vx] < 0.1), bool(abs(xs[-1, State.d]) < 0.1)
+    (True, True)
+    """
+    sc = sampling or SamplingConfig()
+    n, dt, lam = config.horizon_steps, config.dt_s, config.utilization_factor
+    m = params.mass_kg
+    x = np.asarray(x0, dtype=float).copy()
+    xs, us = [x], []
+    ax = 0.0
+    for _ in range(n):
+        s = np.array([x[State.s]])
+        kappa = float(np.asarray(curvature_of_s(s), dtype=float).reshape(-1)[0])
+        mu = float(np.asarray(mu_hat_of_s(s), dtype=float).reshape(-1)[0])
+        fzf, fzr = (float(f) for f in normal_loads_n(ax, params))
+        c_r = rear_cornering_stiffness_n_per_rad(params, fzr, lam)
+        limit_f, limit_r = lam * mu * fzf, lam * mu * fzr
+        # Brake at the declared deceleration, but never past standstill within this step.
+        decel_target = config.minimal_risk_decel_fraction * mu * GRAVITY_MPS2
+        decel = min(decel_target, max(x[State.vx], 0.0) / dt)
+        fxf, fxr = _braking_forces_n(m * decel, fzf, fzr, limit_f, limit_r, params)
+        hold_f, hold_r = _braking_forces_n(m * decel_target, fzf, fzr, limit_f, limit_r, params)
+        u = np.zeros(N_INPUTS)
+        if x[State.vx] <= MIN_SPEED_FOR_SLIP_MPS:
+            # Below the model's slip-speed floor its lateral modes are too stiff for an explicit
+            # step of dt; the remaining travel (v²/2a, under 0.2 m) is covered along the heading
+            # and the vehicle is held at rest with the brakes on.
+            travel = 0.5 * x[State.vx] ** 2 / max(decel_target, 1e-9)
+            x = x.copy()
+            x[State.s] += travel * np.cos(x[State.dpsi])
+            x[State.d] += travel * np.sin(x[State.dpsi])
+            x[State.vx] = x[State.vy] = x[State.psidot] = 0.0
+            u[Input.fxf], u[Input.fxr] = hold_f, hold_r
+            ax = 0.0
+        else:
+            v = max(x[State.vx], 1.0)
+            fyf = float(steering_force_n(x, reference_d_m, kappa, v, params, sc))
+            room = np.sqrt(max(limit_f**2 - fxf**2, 0.0)) * 0.95
+            u[Input.fyf] = np.clip(fyf, -room, room)
+            u[Input.fxf], u[Input.fxr] = fxf, fxr
+            x = rk4_step(x, u, kappa, c_r, params, dt)
+            x[State.vx] = max(x[State.vx], 0.0)
+            ax = (fxf + fxr) / m
+        xs.append(x)
+        us.append(u)
+    return np.stack(xs), np.stack(us)
+
+
+def _braking_forces_n(
+    force_n: float, fzf: float, fzr: float, limit_f: float, limit_r: float,
+    params: VehicleParams,
+) -> tuple[float, float]:
+    """Braking force ``force_n`` ≥ 0 split by normal load, each axle capped (negative values)."""
+    lower, _ = longitudinal_force_bounds_n(params)
+    share_f = fzf / (fzf + fzr)
+    fxf = -min(force_n * share_f, BRAKING_SHARE_OF_LIMIT * limit_f, -lower[0])
+    fxr = -min(force_n * (1.0 - share_f), BRAKING_SHARE_OF_LIMIT * limit_r, -lower[1])
+    return fxf, fxr

@@ -1,0 +1,194 @@
+"""Guards at the planner's boundary: the friction estimate going in, the solution coming out.
+
+**μ̂ sanitisation rule** (applied to every value the planner reads from ``mu_hat_of_s``):
+
+* finite and in ``[MU_MIN, MU_MAX]`` = [0.05, 2]: used as it is;
+* finite and in ``(0, MU_MIN)`` or above ``MU_MAX``: clipped to that range;
+* non-finite or ≤ 0: the previous planning step's (already sanitised) profile at the same ``s``
+  (held constant beyond its ends); without a previous profile, ``PlannerConfig.mu_floor``
+  (default 0.1, a slippery road);
+* a friction source that raises, or returns something that does not broadcast to the queried
+  positions: every value is treated as non-finite (and a warning is logged).
+
+Every replaced or clipped value counts; :attr:`Plan.mu_sanitized_stages` reports the count for
+the stages of the final solve.
+
+**Solution check** (:func:`check_solution`): a solver's "success" is used only if it is finite,
+its front forces lie within the front friction polygons, its rear forces within the rear ones
+and its longitudinal forces within the actuator bounds (each up to a tolerance), and its states
+are plausible: speed within ``[0, MAX_SPEED_MPS]``, ``d`` within the corridor and the heading
+error bounded (tolerances in :class:`~mufusion.planner.ocp.PlausibilityLimits`).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from mufusion.planner.ocp import (
+    MAX_SPEED_MPS,
+    MU_MAX,
+    MU_MIN,
+    PlausibilityLimits,
+    longitudinal_force_bounds_n,
+    polygon_directions,
+)
+from mufusion.planner.plan import FallbackReason
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import Input, State, rear_lateral_force_n
+
+_log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class FrictionProfile:
+    """A sanitised μ̂ profile: values ``mu`` at increasing positions ``s_m`` [m]."""
+
+    s_m: np.ndarray
+    mu: np.ndarray
+
+    @classmethod
+    def from_stages(cls, s_m: np.ndarray, mu: np.ndarray) -> FrictionProfile:
+        """Profile from per-stage values (sorted by position, so it can be interpolated)."""
+        order = np.argsort(np.asarray(s_m, dtype=float), kind="stable")
+        return cls(np.asarray(s_m, dtype=float)[order], np.asarray(mu, dtype=float)[order])
+
+    def at(self, s_m: np.ndarray) -> np.ndarray:
+        """Linear interpolation, held constant beyond the ends."""
+        return np.interp(s_m, self.s_m, self.mu)
+
+
+def sanitize_mu(
+    raw: np.ndarray, s_m: np.ndarray, previous: FrictionProfile | None, floor: float
+) -> tuple[np.ndarray, int]:
+    """Apply the module's rule to ``raw`` μ̂ at positions ``s_m``.
+
+    Parameters
+    ----------
+    raw
+        Values from the friction source, same shape as ``s_m`` (may hold NaN, inf, ≤ 0).
+    s_m
+        Positions [m].
+    previous
+        The previous step's sanitised profile, or ``None``.
+    floor
+        Value for a bad stage that no previous profile covers.
+
+    Returns
+    -------
+    mu, count
+        Sanitised values and how many were replaced or clipped.
+
+    Examples
+    --------
+    >>> mu, n = sanitize_mu(np.array([0.8, np.nan, 3.0, 0.01]), np.arange(4.0), None, 0.1)
+    >>> mu.tolist(), n
+    ([0.8, 0.1, 2.0, 0.05], 3)
+    """
+    raw = np.asarray(raw, dtype=float)
+    bad = ~np.isfinite(raw) | (raw <= 0.0)
+    with np.errstate(invalid="ignore"):
+        clipped = ~bad & ((raw < MU_MIN) | (raw > MU_MAX))
+    mu = np.clip(np.where(bad, MU_MIN, raw), MU_MIN, MU_MAX)
+    if np.any(bad):
+        fill = previous.at(s_m) if previous is not None else np.full(np.shape(s_m), floor)
+        mu = np.where(bad, np.clip(fill, MU_MIN, MU_MAX), mu)
+    return mu, int(np.count_nonzero(bad) + np.count_nonzero(clipped))
+
+
+class SanitizedFriction:
+    """``mu_hat_of_s`` with the sanitisation rule applied; never raises.
+
+    ``last_count`` is the number of values replaced or clipped in the latest call.
+    """
+
+    def __init__(
+        self,
+        mu_hat_of_s: Callable[[np.ndarray], np.ndarray],
+        previous: FrictionProfile | None,
+        floor: float,
+    ) -> None:
+        self._source = mu_hat_of_s
+        self._previous = previous
+        self._floor = floor
+        self.last_count = 0
+
+    def __call__(self, s_m: np.ndarray) -> np.ndarray:
+        s = np.asarray(s_m, dtype=float)
+        try:
+            raw = np.broadcast_to(np.asarray(self._source(s), dtype=float), s.shape)
+        except Exception as exc:  # a broken friction source degrades, never raises
+            _log.warning("friction estimate unusable (%r); sanitising every stage", exc)
+            raw = np.full(s.shape, np.nan)
+        mu, self.last_count = sanitize_mu(raw, s, self._previous, self._floor)
+        return mu
+
+
+def check_solution(
+    states: np.ndarray,
+    inputs: np.ndarray,
+    stage: dict[str, np.ndarray],
+    d_lo: np.ndarray,
+    d_hi: np.ndarray,
+    params: VehicleParams,
+    n_sides: int,
+    limits: PlausibilityLimits,
+) -> FallbackReason:
+    """``FallbackReason.NONE`` if a solution may be used, else why not.
+
+    Parameters
+    ----------
+    states, inputs
+        The solution, ``(N+1, 6)`` and ``(N, 3)``.
+    stage
+        The stage parameters of the solve (:func:`~mufusion.planner.ocp.stage_parameters`).
+    d_lo, d_hi
+        The corridor of the solve at stages 1..N [m].
+    params
+        Vehicle parameters.
+    n_sides
+        Friction-polygon sides.
+    limits
+        Tolerances.
+
+    Returns
+    -------
+    FallbackReason
+        ``NONE``, ``NON_FINITE`` or ``IMPLAUSIBLE``.
+    """
+    xs, us = np.asarray(states, dtype=float), np.asarray(inputs, dtype=float)
+    if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(us))):
+        return FallbackReason.NON_FINITE
+    normals, ratio = polygon_directions(n_sides)
+    front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
+    fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], params)
+    rear = normals @ np.stack([us[:, Input.fxr], fyr])
+    lower, upper = longitudinal_force_bounds_n(params)
+    slack = limits.force_bound_tolerance * np.maximum(np.abs(lower), np.abs(upper))
+    fx = us[:, [Input.fxf, Input.fxr]]
+    reasons = {
+        "front polygon": np.any(
+            front > (ratio + limits.front_polygon_tolerance) * stage["radius_front"]
+        ),
+        "rear polygon": np.any(
+            rear > (ratio + limits.rear_polygon_tolerance) * stage["radius_rear"]
+        ),
+        "longitudinal force bounds": np.any((fx < lower - slack) | (fx > upper + slack)),
+        "speed": np.any(
+            (xs[:, State.vx] < -limits.speed_tolerance_mps)
+            | (xs[:, State.vx] > MAX_SPEED_MPS + limits.speed_tolerance_mps)
+        ),
+        "corridor": np.any(
+            (xs[1:, State.d] < d_lo - limits.corridor_tolerance_m)
+            | (xs[1:, State.d] > d_hi + limits.corridor_tolerance_m)
+        ),
+        "heading error": np.any(np.abs(xs[:, State.dpsi]) > limits.max_heading_error_rad),
+    }
+    failed = [name for name, bad in reasons.items() if bad]
+    if failed:
+        _log.warning("planner solution rejected: outside the %s", ", ".join(failed))
+        return FallbackReason.IMPLAUSIBLE
+    return FallbackReason.NONE
