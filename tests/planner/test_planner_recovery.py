@@ -9,6 +9,7 @@ from mufusion.planner.ocp import PlannerConfig, PlausibilityLimits
 from mufusion.planner.plan import FallbackReason
 from mufusion.planner.planner import TractionAdaptivePlanner
 from mufusion.planner.safeguards import FrictionProfile, SanitizedFriction, sanitize_mu
+from mufusion.planner.safety import SafetySettings
 from mufusion.vehicle.params import GRAVITY_MPS2, TRUCK
 from mufusion.vehicle.planner_model import Input, State
 
@@ -139,7 +140,7 @@ def test_all_nan_friction_from_a_cold_start_uses_the_floor():
     plan = planner.step(X0, 0.0, straight, lambda s: np.nan * np.asarray(s), [], "cruise", 15.0)
     assert plan.ok
     assert plan.mu_sanitized_stages == CONFIG.horizon_steps
-    np.testing.assert_allclose(plan.mu_hat, CONFIG.mu_floor)
+    np.testing.assert_allclose(plan.mu_hat, CONFIG.safety.mu_floor)
     assert np.all(np.isfinite(plan.states))
 
 
@@ -183,14 +184,14 @@ def test_without_reinitialisation_the_solver_stays_poisoned():
 def test_consecutive_fallbacks_are_counted_and_cleared(faulty):
     planner, backend = faulty
     planner.reset()
-    k = CONFIG.max_consecutive_fallbacks
+    k = CONFIG.safety.max_consecutive_fallbacks
     plans = _run(planner, 3 + k + 2, backend=backend,
                  fault_at_step=lambda i: "status4" if 3 <= i < 3 + k else "none")
     counts = [p.consecutive_fallbacks for p in plans]
     assert counts == [0, 0, 0, *range(1, k + 1), 0, 0]
     assert all(p.fallback_reason is FallbackReason.SOLVER_STATUS for p in plans[3:3 + k])
     assert planner.failures == k
-    assert plans[3 + k - 1].consecutive_fallbacks >= CONFIG.max_consecutive_fallbacks
+    assert plans[3 + k - 1].consecutive_fallbacks >= CONFIG.safety.max_consecutive_fallbacks
     # The fallback is the previous plan shifted by one stage.
     np.testing.assert_allclose(plans[3].states[1:-1], plans[2].states[2:])
     assert plans[-1].ok and planner.consecutive_fallbacks == 0
@@ -266,7 +267,7 @@ def test_minimal_risk_brakes_to_a_stop_in_lane_at_the_declared_rate(faulty, brok
         backend.mode = "none"
     assert all(p.mode == "minimal_risk" for p in plans)
     assert all(p.ok != broken_solver for p in plans)
-    decel = CONFIG.minimal_risk_decel_fraction * mu * GRAVITY_MPS2
+    decel = CONFIG.safety.minimal_risk_decel_fraction * mu * GRAVITY_MPS2
     ideal = 15.0**2 / (2.0 * decel)
     assert xs[-1, State.vx] < 0.05
     assert 0.9 * ideal < xs[-1, State.s] < 1.2 * ideal
@@ -279,12 +280,12 @@ def test_minimal_risk_brakes_to_a_stop_in_lane_at_the_declared_rate(faulty, brok
 
 def test_config_validates_the_recovery_settings():
     with pytest.raises(ValueError, match="max_consecutive_fallbacks"):
-        PlannerConfig(max_consecutive_fallbacks=0)
+        SafetySettings(max_consecutive_fallbacks=0)
     with pytest.raises(ValueError, match="max_consecutive_fallbacks"):
-        PlannerConfig(max_consecutive_fallbacks=True)
+        SafetySettings(max_consecutive_fallbacks=True)
     with pytest.raises(ValueError, match="minimal_risk_decel_fraction"):
-        PlannerConfig(minimal_risk_decel_fraction=1.5)
+        SafetySettings(minimal_risk_decel_fraction=1.5)
     with pytest.raises(ValueError, match="mu_floor"):
-        PlannerConfig(mu_floor=0.0)
+        SafetySettings(mu_floor=0.0)
     with pytest.raises(ValueError, match="corridor_tolerance_m"):
         PlausibilityLimits(corridor_tolerance_m=-1.0)

@@ -1,7 +1,7 @@
 """Minimal-risk manoeuvre: brake to a stop in lane at a declared fraction of μ̂ g.
 
 The manoeuvre a supervisor falls back to when the planner has not produced a usable solution for
-``PlannerConfig.max_consecutive_fallbacks`` steps in a row (or cannot be trusted otherwise). Its
+``SafetySettings.max_consecutive_fallbacks`` steps in a row (or cannot be trusted otherwise). Its
 roll-out needs no solver: the planner's model under a braking and lane-keeping law.
 
 * Deceleration target ``a_k = minimal_risk_decel_fraction · μ̂(s_k) · g`` (default 0.5 μ̂ g),
@@ -94,7 +94,7 @@ def minimal_risk_rollout(
         c_r = rear_cornering_stiffness_n_per_rad(params, fzr, lam)
         limit_f, limit_r = lam * mu * fzf, lam * mu * fzr
         # Brake at the declared deceleration, but never past standstill within this step.
-        decel_target = config.minimal_risk_decel_fraction * mu * GRAVITY_MPS2
+        decel_target = config.safety.minimal_risk_decel_fraction * mu * GRAVITY_MPS2
         decel = min(decel_target, max(x[State.vx], 0.0) / dt)
         fxf, fxr = _braking_forces_n(m * decel, fzf, fzr, limit_f, limit_r, params)
         hold_f, hold_r = _braking_forces_n(m * decel_target, fzf, fzr, limit_f, limit_r, params)

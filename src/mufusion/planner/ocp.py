@@ -16,6 +16,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from mufusion.planner.safety import SafetySettings
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -136,13 +137,9 @@ class PlannerConfig:
     min_speed_mps: float = 0.5
     cold_start_iterations: int = 3
     max_cruise_accel_mps2: float = 1.5
-    # Recovery (see docs/planner.md, "Failures and recovery"). After this many planning steps in a
-    # row without a usable solution the caller should switch to mode "minimal_risk".
-    max_consecutive_fallbacks: int = 5
-    # Minimal-risk manoeuvre: brake in lane at this fraction of μ̂ g.
-    minimal_risk_decel_fraction: float = 0.5
-    # μ̂ used for a stage whose estimate is non-finite or <= 0 when no earlier profile covers it.
-    mu_floor: float = 0.1
+    # Recovery (see docs/planner.md, "Failures and recovery"): friction floor, minimal-risk
+    # deceleration, and the fallback count after which the caller switches to "minimal_risk".
+    safety: SafetySettings = field(default_factory=SafetySettings)
     plausibility: PlausibilityLimits = field(default_factory=PlausibilityLimits)
 
     def __post_init__(self) -> None:
@@ -168,20 +165,6 @@ class PlannerConfig:
             )
         if self.lane_d_min_m >= self.lane_d_max_m:
             raise ValueError("lane_d_min_m must be below lane_d_max_m")
-        if isinstance(self.max_consecutive_fallbacks, bool) or not (
-            1 <= self.max_consecutive_fallbacks <= 1000
-        ):
-            raise ValueError(
-                "max_consecutive_fallbacks must be an integer in [1, 1000], "
-                f"got {self.max_consecutive_fallbacks!r}"
-            )
-        if not 0.0 < self.minimal_risk_decel_fraction <= 1.0:
-            raise ValueError(
-                "minimal_risk_decel_fraction must be in (0, 1], "
-                f"got {self.minimal_risk_decel_fraction}"
-            )
-        if not MU_MIN <= self.mu_floor <= MU_MAX:
-            raise ValueError(f"mu_floor must be in [{MU_MIN}, {MU_MAX}], got {self.mu_floor}")
 
 
 # Range of μ̂ the planner accepts per stage; finite values outside are clipped to it (see
@@ -406,7 +389,7 @@ def tracking_reference(
     elif mode == "evade":
         speed_w = w.evade_speed
     elif mode == "minimal_risk":
-        decel = config.minimal_risk_decel_fraction * np.asarray(mu_hat, float) * GRAVITY_MPS2
+        decel = config.safety.minimal_risk_decel_fraction * np.asarray(mu_hat, float) * GRAVITY_MPS2
         v[0] = max(float(speed_mps), 0.0)
         for k in range(n):
             v[k + 1] = max(v[k] - decel[k] * config.dt_s, 0.0)

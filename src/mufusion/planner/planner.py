@@ -5,7 +5,7 @@ estimate (sanitised, see :mod:`mufusion.planner.safeguards`), normal loads and r
 guess's predicted positions, builds the lateral corridor and runs one real-time iteration. A solve
 that fails, raises, or returns a non-finite or implausible solution keeps the shifted plan, is
 counted and logged, re-initialises the solver, and never raises. After
-``PlannerConfig.max_consecutive_fallbacks`` such steps in a row the caller should switch to
+``SafetySettings.max_consecutive_fallbacks`` such steps in a row the caller should switch to
 ``mode="minimal_risk"`` (:mod:`mufusion.planner.minimal_risk`).
 """
 
@@ -230,7 +230,7 @@ class TractionAdaptivePlanner:
             o if isinstance(o, PlannerObstacle) else PlannerObstacle(*map(float, o))
             for o in obstacles
         ]
-        mu_of_s = SanitizedFriction(mu_hat_of_s, self._mu_profile, cfg.mu_floor)
+        mu_of_s = SanitizedFriction(mu_hat_of_s, self._mu_profile, cfg.safety.mu_floor)
         started = time.perf_counter()
         sampled = False
         if mode == "minimal_risk":

@@ -5,7 +5,7 @@
 * finite and in ``[MU_MIN, MU_MAX]`` = [0.05, 2]: used as it is;
 * finite and in ``(0, MU_MIN)`` or above ``MU_MAX``: clipped to that range;
 * non-finite or ≤ 0: the previous planning step's (already sanitised) profile at the same ``s``
-  (held constant beyond its ends); without a previous profile, ``PlannerConfig.mu_floor``
+  (held constant beyond its ends); without a previous profile, ``SafetySettings.mu_floor``
   (default 0.1, a slippery road);
 * a friction source that raises, or returns something that does not broadcast to the queried
   positions: every value is treated as non-finite (and a warning is logged).

@@ -15,8 +15,9 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from mufusion.estimators import ErrorModel
+from mufusion.planner.safety import SafetySettings
 from mufusion.road import FrictionMap, Obstacle, Road, straight_road, turn_road
-from mufusion.sim.faults import Fault, SafetySettings
+from mufusion.sim.faults import Fault
 from mufusion.sim.loop import LoopRates
 from mufusion.vehicle.params import VehicleParams
 

@@ -16,8 +16,9 @@ from typing import Any
 
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
+from mufusion.planner.safety import SafetySettings
 from mufusion.scenarios.config import SCENARIO_KINDS, PopupScenario, ScenarioConfig, TurnScenario
-from mufusion.sim.faults import Fault, SafetySettings
+from mufusion.sim.faults import Fault
 
 if sys.version_info >= (3, 11):
     import tomllib

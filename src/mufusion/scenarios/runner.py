@@ -56,6 +56,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         use_sampling=cfg.planner.use_sampling,
         lane_d_min_m=lo,
         lane_d_max_m=hi,
+        safety=cfg.safety,
     )
 
 

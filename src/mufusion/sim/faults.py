@@ -1,4 +1,4 @@
-"""Faults injected into the closed loop, and the safety settings that govern the reactions.
+"""Faults injected into the closed loop (the reactions' settings: :class:`SafetySettings`).
 
 A :class:`Fault` is active on ``[start_s, start_s + duration_s)`` of simulated time. What each kind
 does (the loop applies it; :mod:`mufusion.sim.loop` documents the reactions):
@@ -23,6 +23,11 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal, get_args
+
+from mufusion.planner.safety import SafetySettings
+
+__all__ = ["FAULT_KINDS", "Fault", "FaultKind", "SafetySettings", "active_kinds",
+           "estimate_delay_s"]
 
 FaultKind = Literal[
     "local_dropout", "camera_dropout", "camera_nan", "estimate_delay", "estimate_nan",
@@ -59,46 +64,6 @@ class Fault:
 
     def active(self, t_s: float) -> bool:
         return self.start_s <= t_s < self.start_s + self.duration_s
-
-
-@dataclass(frozen=True)
-class SafetySettings:
-    """How the loop reacts to missing, stale or failing parts.
-
-    Attributes
-    ----------
-    max_estimate_age_s
-        An estimate older than this is handled like a missing one [s].
-    max_consecutive_fallbacks
-        After this many planning steps in a row without a usable plan the vehicle enters the
-        minimal-risk manoeuvre.
-    mu_floor
-        Friction assumed where no usable estimate exists [-]: the lowest value the paper's
-        camera classes admit (snow/ice, 0.1).
-    mrm_utilization
-        Share of ``μ g`` the minimal-risk manoeuvre brakes with when the planner cannot plan it
-        (the rest stays for lane keeping) [-].
-    """
-
-    max_estimate_age_s: float = 0.35
-    max_consecutive_fallbacks: int = 5
-    mu_floor: float = 0.1
-    mrm_utilization: float = 0.5
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.max_estimate_age_s) and self.max_estimate_age_s > 0.0):
-            raise ValueError(
-                f"max_estimate_age_s must be finite and > 0 s, got {self.max_estimate_age_s!r}"
-            )
-        if not 1 <= self.max_consecutive_fallbacks <= 100:
-            raise ValueError(
-                "max_consecutive_fallbacks must be in [1, 100], got "
-                f"{self.max_consecutive_fallbacks!r}"
-            )
-        if not 0.0 < self.mu_floor <= 1.0:
-            raise ValueError(f"mu_floor must be in (0, 1], got {self.mu_floor!r}")
-        if not 0.0 < self.mrm_utilization <= 1.0:
-            raise ValueError(f"mrm_utilization must be in (0, 1], got {self.mrm_utilization!r}")
 
 
 def active_kinds(faults: Sequence[Fault], t_s: float) -> frozenset[str]:

@@ -16,12 +16,13 @@ import time
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Literal, Protocol
+from typing import Protocol
 
 import numpy as np
 
 from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan, PlannerObstacle
+from mufusion.planner.ocp import PlannerMode
 from mufusion.sim.faults import Fault, SafetySettings, active_kinds, estimate_delay_s
 from mufusion.sim.log import RunLog
 from mufusion.sim.minimal_risk import minimal_risk_command
@@ -35,9 +36,9 @@ from mufusion.vehicle.plant import PlantOutput, PlantState
 
 _log = logging.getLogger(__name__)
 
-PlanningMode = Literal["cruise", "evade", "emergency"]
-MINIMAL_RISK_MODE: PlanningMode = "emergency"
-"""The planner's mode during the minimal-risk manoeuvre: stop short, in lane."""
+PlanningMode = PlannerMode
+MINIMAL_RISK_MODE: PlanningMode = "minimal_risk"
+"""The planner's mode during the minimal-risk manoeuvre: brake to a stop in lane."""
 
 
 @dataclass(frozen=True)
@@ -414,7 +415,7 @@ class ClosedLoop:
         mu = float(mu_hat[0]) if mu_hat.size and np.isfinite(mu_hat[0]) else self.safety.mu_floor
         return minimal_risk_command(
             xf, curvature, self.params, min(max(mu, self.safety.mu_floor), 2.0),
-            self.safety.mrm_utilization,
+            self.safety.minimal_risk_decel_fraction,
         )
 
     def _mode(self, obstacles: Sequence[PlannerObstacle]) -> PlanningMode:
