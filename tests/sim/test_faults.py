@@ -113,7 +113,10 @@ class _Raising:
         self.calls = 0
         self.fail_at = fail_at
 
-    def step(self, s_ahead_m, mu_true_ahead, utilization):
+    def observe(self, t_s, utilization_front, utilization_rear, mu_front, mu_rear):
+        pass
+
+    def step(self, s_ahead_m, mu_true_ahead, utilization, *, camera_ok=True, t_s=None):
         self.calls += 1
         if self.calls > self.fail_at:
             raise RuntimeError("sensor bus down")

@@ -54,7 +54,10 @@ class _Friction:
     def __init__(self) -> None:
         self.utilizations: list[float] = []
 
-    def step(self, s_ahead_m, mu_true_ahead, utilization):
+    def observe(self, t_s, utilization_front, utilization_rear, mu_front, mu_rear):
+        pass
+
+    def step(self, s_ahead_m, mu_true_ahead, utilization, *, camera_ok=True, t_s=None):
         self.utilizations.append(utilization)
         return FrictionEstimate(s_m=np.asarray(s_ahead_m), mu_hat=np.asarray(mu_true_ahead) - 0.1,
                                 local_available=False, local_mu=None)

@@ -130,6 +130,23 @@ class FrictionConfiguration:
         """Forget the local estimator's measurements (the rng is not rewound)."""
         self.local.reset()
 
+    def observe(
+        self,
+        t_s: float,
+        utilization_front: float,
+        utilization_rear: float,
+        mu_front: float,
+        mu_rear: float,
+    ) -> None:
+        """Record the realised tire state after a plant step (time ``t_s`` [s], its end).
+
+        Only a local timing with its own sample rate keeps these (the authors' 4 Hz estimator);
+        with the paper's per-step timing the planning step's peak utilization is all it needs,
+        and this returns at once.
+        """
+        if not self.local.timing.per_planning_step:
+            self.local.observe(t_s, utilization_front, utilization_rear, mu_front, mu_rear)
+
     def step(
         self,
         s_ahead_m: np.ndarray,
@@ -137,6 +154,7 @@ class FrictionConfiguration:
         utilization: float,
         *,
         camera_ok: bool = True,
+        t_s: float | None = None,
     ) -> FrictionEstimate:
         """Estimate the friction over the grid ahead for one planning step.
 
@@ -153,6 +171,10 @@ class FrictionConfiguration:
             False when the camera delivers nothing usable this step (dropped out, or its values
             were invalid and discarded): P then assumes the lowest class minimum everywhere,
             F and F-safe fuse without predictive data.
+        t_s : float, optional
+            Time of this step [s]. With a local timing that samples at its own rate (not once
+            per planning step) the local estimate is the one published by ``t_s`` from what
+            :meth:`observe` recorded, and ``utilization`` is not used.
 
         Returns
         -------
@@ -168,7 +190,10 @@ class FrictionConfiguration:
         s, mu = check_grid(s_ahead_m, mu_true_ahead, mu_name="mu_true_ahead")
         if s[0] != 0.0:
             raise ValueError(f"s_ahead_m must start at 0 m (under the vehicle), got {s[0]!r}")
-        local = self.local.update(float(mu[0]), utilization)
+        if self.local.timing.per_planning_step or t_s is None:
+            local = self.local.update(float(mu[0]), utilization)
+        else:
+            local = self.local.update_at(t_s)
         mu_hat, fused, data = self._mu_hat(s, mu, local, camera_ok)
         mu_hat = np.clip(np.asarray(mu_hat, dtype=float), MU_HAT_MIN, MU_HAT_MAX)
         if not np.all(np.isfinite(mu_hat)):

@@ -113,6 +113,11 @@ class EstimationConfig(_Strict):
     measured (with its error model) on the road under the vehicle just before the run starts."""
     length_scale_m: Annotated[float, Field(gt=0.0, le=500.0)] | None = None
     """GP length scale; ``None`` keeps the fusion's default."""
+    local_timing: Literal["paper", "authors"] = "paper"
+    """When the slip-based estimator samples and publishes (``docs/estimators.md``): the paper's
+    once per planning step, or the authors' 4 Hz front-axle samples with a 3-sample buffer."""
+    class_table: Literal["paper", "authors"] = "paper"
+    """The camera's surface classes: the paper's Table I or the authors' 0.3-wide classes."""
 
 
 class PlannerSettings(_Strict):

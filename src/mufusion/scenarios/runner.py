@@ -15,6 +15,7 @@ from collections.abc import Callable
 import numpy as np
 
 from mufusion.configurations import Configuration, make_configuration
+from mufusion.estimators import class_table, local_timing
 from mufusion.planner import (
     PlannerConfig,
     PlannerObstacle,
@@ -104,6 +105,8 @@ def run_scenario(
         rng=rng,
         initial_local_mu=cfg.estimation.initial_local_mu,
         length_scale_m=cfg.estimation.length_scale_m,
+        classes=class_table(cfg.estimation.class_table),
+        local_timing=local_timing(cfg.estimation.local_timing),
     )
     x0_x, x0_y, x0_psi = (float(v) for v in road.to_cartesian(s0, 0.0, 0.0))
     plant = Plant(params, initial_state(params, x0_x, x0_y, x0_psi, cfg.initial_speed_mps),

@@ -83,12 +83,36 @@ def _check_divides(name: str, value: float, base_name: str, base: float) -> None
 
 
 class FrictionSource(Protocol):
-    """A friction estimate over the grid ahead, once per planning step (see
-    :mod:`mufusion.configurations`)."""
+    """A friction estimate over the grid ahead, once per planning step.
+
+    The interface of :class:`~mufusion.configurations.FrictionConfiguration`; a source of your
+    own plugs into :class:`ClosedLoop` by implementing these two calls.
+    """
 
     def step(
-        self, s_ahead_m: np.ndarray, mu_true_ahead: np.ndarray, utilization: float
-    ) -> FrictionEstimate: ...
+        self,
+        s_ahead_m: np.ndarray,
+        mu_true_ahead: np.ndarray,
+        utilization: float,
+        *,
+        camera_ok: bool = True,
+        t_s: float | None = None,
+    ) -> FrictionEstimate:
+        """The estimate at distances ``s_ahead_m`` ahead (``mu_true_ahead`` is the truth there,
+        ``utilization`` the peak realised tire utilization since the last step; ``camera_ok``
+        False while the camera is out)."""
+        ...
+
+    def observe(
+        self,
+        t_s: float,
+        utilization_front: float,
+        utilization_rear: float,
+        mu_front: float,
+        mu_rear: float,
+    ) -> None:
+        """Called after every plant step with the realised utilization and true μ per axle."""
+        ...
 
 
 class Planner(Protocol):
@@ -282,6 +306,9 @@ class ClosedLoop:
             mu_front, mu_rear = self.world.friction_under_axles(x_plant, self.params)
             last = self.plant.step(command, mu_front, mu_rear)
             util_window = max(util_window, last.utilization_front, last.utilization_rear)
+            self.friction.observe(
+                t + dt, last.utilization_front, last.utilization_rear, mu_front, mu_rear
+            )
 
     # -- one planning step ------------------------------------------------------------------
     def _planning_step(
@@ -369,12 +396,12 @@ class ClosedLoop:
         s_abs = s_ego + self.estimate_grid_m
         mu_true = self.world.friction(s_abs)
         util = 0.0 if "local_dropout" in kinds else utilization
-        camera_faults = {"camera_dropout", "camera_nan"} & kinds
+        # An absent camera, or one whose values are NaN, gives nothing usable: discarded.
+        camera_ok = not ({"camera_dropout", "camera_nan"} & kinds)
         try:
-            if camera_faults:
-                # The camera's output is unusable (absent or NaN): it is discarded.
-                return self.friction.step(self.estimate_grid_m, mu_true, util, camera_ok=False)
-            return self.friction.step(self.estimate_grid_m, mu_true, util)
+            return self.friction.step(
+                self.estimate_grid_m, mu_true, util, camera_ok=camera_ok, t_s=t
+            )
         except Exception as exc:
             self._recorder.event(t, "friction_source_error", f"{type(exc).__name__}: {exc}")
             self._enter_minimal_risk(t, "the friction source failed")
@@ -426,10 +453,15 @@ class ClosedLoop:
     def _warm_up(self, steps: int) -> None:
         if steps <= 0:
             return
-        xf = self.world.frenet_state(self.plant.x)
+        x_plant = self.plant.x
+        xf = self.world.frenet_state(x_plant)
         s_ego = float(xf[State.s])
         s_abs = s_ego + self.estimate_grid_m
-        estimate = self.friction.step(self.estimate_grid_m, self.world.friction(s_abs), 0.0)
+        # The local estimator has seen the tires rolling freely at the start.
+        self.friction.observe(0.0, 0.0, 0.0, *self.world.friction_under_axles(x_plant, self.params))
+        estimate = self.friction.step(
+            self.estimate_grid_m, self.world.friction(s_abs), 0.0, t_s=0.0
+        )
         for k in range(steps):
             self._plan(xf, -(steps - k) / self.rates.planner_hz, s_ego, estimate, [], "cruise")
 
