@@ -14,8 +14,13 @@ from mufusion.road import (
     Obstacle,
     footprint_clearance_m,
     footprint_corner_offsets_m,
+    footprint_lane_margins,
+    lane_excursion_m,
+    lane_margin_m,
     obstacle_active,
+    opposing_lane_depth_m,
     rectangle_corners,
+    road_margin_m,
     signed_clearance_m,
     straight_road,
     turn_road,
@@ -54,6 +59,94 @@ def test_corner_offsets_are_exact_in_a_curve() -> None:
     for across, sign in ((WIDTH / 2, 1.0), (-WIDTH / 2, -1.0)):
         expected = radius - math.hypot(LENGTH / 2, radius - across)
         assert np.sort(d)[0 if sign < 0 else -1] == pytest.approx(expected, abs=1e-9)
+
+
+def test_graded_margins_of_a_yawed_rectangle_on_a_straight_road() -> None:
+    # A 4 m × 2 m rectangle yawed by 30° at d = 0.5 m, lane width 3.5 m. Corners at
+    # d = 0.5 ± 2 sin 30° ± 1 cos 30°: the outermost left at 0.5 + 1 + 0.866 = 2.366 m, the
+    # outermost right at 0.5 − 1.866 = −1.366 m.
+    road = straight_road(100.0, lane_width_m=3.5)
+    d = footprint_corner_offsets_m(road.path, 50.0, 0.5, math.radians(30.0), 4.0, 2.0)
+    top, bottom = 0.5 + 1.0 + math.sqrt(3.0) / 2.0, 0.5 - 1.0 - math.sqrt(3.0) / 2.0
+    assert sorted(d.tolist()) == pytest.approx(
+        sorted([top, bottom, 0.5 + 1.0 - math.sqrt(3.0) / 2.0, 0.5 - 1.0 + math.sqrt(3.0) / 2.0]),
+        abs=1e-12,
+    )
+    assert float(lane_margin_m(d, 3.5)) == pytest.approx(1.75 - top, abs=1e-12)  # −0.616
+    assert float(lane_excursion_m(d, 3.5)) == pytest.approx(top - 1.75, abs=1e-12)
+    assert float(opposing_lane_depth_m(d, 3.5)) == pytest.approx(top - 1.75, abs=1e-12)
+    # Road edges at −1.75 and 5.25: the right side is the closer one, 1.75 − 1.366 = 0.384 m.
+    assert float(road_margin_m(d, 3.5)) == pytest.approx(bottom + 1.75, abs=1e-12)
+    # Centred and straight: 0.75 m of room each side, nothing in the opposing lane.
+    d0 = footprint_corner_offsets_m(road.path, 50.0, 0.0, 0.0, 4.0, 2.0)
+    assert float(lane_margin_m(d0, 3.5)) == pytest.approx(0.75)
+    assert float(lane_excursion_m(d0, 3.5)) == 0.0
+    assert float(opposing_lane_depth_m(d0, 3.5)) == 0.0
+    # Off the road on the right by 0.25 m.
+    d_off = footprint_corner_offsets_m(road.path, 50.0, -1.5, 0.0, 4.0, 2.0)
+    assert float(road_margin_m(d_off, 3.5)) == pytest.approx(-0.75)
+    assert float(lane_margin_m(d_off, 3.5)) == pytest.approx(-0.75)
+
+
+def test_graded_margins_in_a_curve_match_the_circle() -> None:
+    # Left arc of radius R: a corner at (±L/2, a) from a tangent pose at offset d0 lies
+    # hypot(L/2, R − d0 − a) from the centre, so d = R − hypot(L/2, R − d0 − a).
+    radius, d0, lane = 28.0, 0.9, 3.5
+    road = turn_road(radius_m=radius, clothoid_m=0.0, approach_m=50.0, exit_m=50.0,
+                     lane_width_m=lane)
+    s_mid = 50.0 + radius * math.pi / 4
+    d = footprint_corner_offsets_m(road.path, s_mid, d0, 0.0, LENGTH, WIDTH)
+    left = radius - math.hypot(LENGTH / 2, radius - d0 - WIDTH / 2)
+    right = radius - math.hypot(LENGTH / 2, radius - d0 + WIDTH / 2)
+    assert float(lane_margin_m(d, lane)) == pytest.approx(lane / 2 - left, abs=1e-9)
+    assert float(opposing_lane_depth_m(d, lane)) == pytest.approx(
+        max(0.0, left - lane / 2), abs=1e-9
+    )
+    assert float(road_margin_m(d, lane)) == pytest.approx(right + lane / 2, abs=1e-9)
+
+
+def test_margins_reject_bad_input_and_work_on_batches() -> None:
+    with pytest.raises(ValueError, match="lane_width_m"):
+        lane_margin_m([0.0, 1.0], 0.0)
+    with pytest.raises(ValueError, match="corner_d_m"):
+        road_margin_m(np.zeros((3, 0)), 3.5)
+    d = np.array([[0.0, 1.0, -1.0, 0.5], [2.0, 1.0, 0.5, 1.5]])
+    np.testing.assert_allclose(lane_margin_m(d, 3.5), [0.75, -0.25])
+    np.testing.assert_allclose(opposing_lane_depth_m(d, 3.5), [0.0, 0.25])
+
+
+def test_booleans_are_the_graded_quantities_at_zero_on_random_poses() -> None:
+    # Straight and curved roads, poses across both lanes and beyond, yawed either way.
+    rng = np.random.default_rng(5)
+    for road in (straight_road(200.0), turn_road(radius_m=28.0, clothoid_m=5.0)):
+        s = rng.uniform(0.0, road.length_m, 2_000)
+        d = rng.uniform(-3.0, 7.0, 2_000)
+        dpsi = rng.uniform(-0.6, 0.6, 2_000)
+        corners = footprint_corner_offsets_m(road.path, s, d, dpsi, LENGTH, WIDTH)
+        w = road.lane_width_m
+        # The definitions the booleans had before the graded quantities existed.
+        left = np.any(np.abs(corners) > 0.5 * w, axis=-1)
+        opposing = np.any(corners > 0.5 * w, axis=-1)
+        off = np.any((corners < -0.5 * w) | (corners > 1.5 * w), axis=-1)
+        assert 0 < left.sum() < left.size and 0 < off.sum() < off.size
+        np.testing.assert_array_equal(road.left_ego_lane(s, d, dpsi, LENGTH, WIDTH), left)
+        np.testing.assert_array_equal(
+            road.entered_opposing_lane(s, d, dpsi, LENGTH, WIDTH), opposing
+        )
+        np.testing.assert_array_equal(road.left_road(s, d, dpsi, LENGTH, WIDTH), off)
+        np.testing.assert_array_equal(lane_margin_m(corners, w) < 0.0, left)
+        np.testing.assert_array_equal(opposing_lane_depth_m(corners, w) > 0.0, opposing)
+        np.testing.assert_array_equal(road_margin_m(corners, w) < 0.0, off)
+        # The plain-float version of one footprint gives the same numbers.
+        for row in rng.choice(corners.shape[0], 50, replace=False):
+            one = footprint_lane_margins(corners[row].tolist(), w)
+            assert one.lane_margin_m == float(lane_margin_m(corners[row], w))
+            assert one.opposing_depth_m == float(opposing_lane_depth_m(corners[row], w))
+            assert one.road_margin_m == float(road_margin_m(corners[row], w))
+            assert one.lane_excursion_m == float(lane_excursion_m(corners[row], w))
+            assert (one.left_lane, one.in_opposing_lane, one.off_road) == (
+                left[row], opposing[row], off[row]
+            )
 
 
 def test_friction_map_segments_and_lanes() -> None:

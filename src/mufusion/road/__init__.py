@@ -1,12 +1,23 @@
 """mufusion.road: reference path, lanes, true friction map and obstacles."""
 
 from mufusion.road.friction import DEFAULT_LANE_WIDTH_M, FrictionMap
-from mufusion.road.geometry import rectangle_corners, signed_clearance_m
+from mufusion.road.geometry import (
+    rectangle_corner_points,
+    rectangle_corners,
+    signed_clearance_m,
+    signed_clearance_points,
+)
 from mufusion.road.lanes import (
+    LaneMargins,
     entered_opposing_lane,
     footprint_corner_offsets_m,
+    footprint_lane_margins,
+    lane_excursion_m,
+    lane_margin_m,
     left_ego_lane,
     left_road,
+    opposing_lane_depth_m,
+    road_margin_m,
 )
 from mufusion.road.obstacles import (
     Obstacle,
@@ -16,23 +27,33 @@ from mufusion.road.obstacles import (
 )
 from mufusion.road.path import PathSegment, ReferencePath
 from mufusion.road.road import Road, straight_road, turn_road
+from mufusion.road.tracking import PointTracker
 
 __all__ = [
     "DEFAULT_LANE_WIDTH_M",
     "FrictionMap",
+    "LaneMargins",
     "Obstacle",
     "PathSegment",
+    "PointTracker",
     "ReferencePath",
     "Road",
     "entered_opposing_lane",
     "footprint_clearance_m",
     "footprint_corner_offsets_m",
+    "footprint_lane_margins",
+    "lane_excursion_m",
+    "lane_margin_m",
     "left_ego_lane",
     "left_road",
     "obstacle_active",
     "obstacle_corners",
+    "opposing_lane_depth_m",
+    "rectangle_corner_points",
     "rectangle_corners",
+    "road_margin_m",
     "signed_clearance_m",
+    "signed_clearance_points",
     "straight_road",
     "turn_road",
 ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -105,3 +106,16 @@ class FrictionMap:
         d = np.asarray(d_m, dtype=float)
         opposing = np.asarray(self.mu_opposing)[index]
         return np.where(d > 0.5 * self.lane_width_m, opposing, ego)
+
+    def mu_at_point(self, s_m: float, d_m: float | None = None) -> float:
+        """:meth:`mu_at` for one point, in plain floats (the closed loop's per-step look-up).
+
+        Examples
+        --------
+        >>> FrictionMap.step(0.8, 0.4, 55.0).mu_at_point(60.0)
+        0.4
+        """
+        index = min(max(bisect.bisect_right(self.start_s_m, s_m) - 1, 0), len(self.mu) - 1)
+        if self.mu_opposing is not None and d_m is not None and d_m > 0.5 * self.lane_width_m:
+            return self.mu_opposing[index]
+        return self.mu[index]

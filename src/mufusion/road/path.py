@@ -23,6 +23,10 @@ _ANCHOR_SPACING_M = 2.0
 # Up to this many points, to_frenet loops over plain floats (faster than numpy for few points).
 _SCALAR_PATH_MAX_POINTS = 8
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(8)
+# Warm-started projection (to_frenet_point): Newton iterations before the global search takes
+# over, and the largest accepted distance from the guess [m].
+_WARM_START_ITERATIONS = 8
+_WARM_START_MAX_JUMP_M = 5.0
 
 
 @dataclass(frozen=True)
@@ -112,6 +116,9 @@ class ReferencePath:
         for k0, dk, length in zip(self._k0, self._dk, lengths, strict=True):
             headings.append(headings[-1] + k0 * length + 0.5 * dk * length**2)
         self._psi0 = np.array(headings)
+        self._max_abs_curvature = float(
+            max(np.max(np.abs(self._k0)), np.max(np.abs(self._k0 + self._dk * lengths)))
+        )
         # Anchors: every segment start plus subdivisions ≤ 2 m; positions by cumulative quadrature.
         anchors = [
             np.linspace(start, end, max(1, math.ceil((end - start) / _ANCHOR_SPACING_M)) + 1)[:-1]
@@ -133,12 +140,18 @@ class ReferencePath:
         self._table_xy = np.stack(self.position(table), axis=-1)
         self._table_heading = self.heading(table)
         # Plain-float copies for the scalar path used by the control loop (one pose at a time,
-        # where numpy's per-call overhead would dominate).
-        self._py = (
-            self._seg_start.tolist(), self._k0.tolist(), self._dk.tolist(), self._psi0.tolist(),
-            self._anchor_s.tolist(), self._anchor_xy.tolist(),
-            list(zip(_GL_NODES.tolist(), _GL_WEIGHTS.tolist(), strict=True)),
-        )
+        # where numpy's per-call overhead would dominate): per anchor, its s, position and the
+        # coefficients of its segment (an anchor never lies in a later segment than the points
+        # it serves, so one search finds both).
+        anchor_segment = self._segment_index(self._anchor_s).tolist()
+        self._py_anchor_s = self._anchor_s.tolist()
+        self._py_anchors = [
+            (a, x, y, float(self._seg_start[i]), float(self._k0[i]), float(self._dk[i]),
+             float(self._psi0[i]))
+            for a, (x, y), i in zip(self._py_anchor_s, self._anchor_xy.tolist(), anchor_segment,
+                                    strict=True)
+        ]
+        self._py_gauss = list(zip(_GL_NODES.tolist(), _GL_WEIGHTS.tolist(), strict=True))
 
     # --- curvature and heading: closed form per segment -------------------------------------
     def _segment_index(self, s: np.ndarray) -> np.ndarray:
@@ -153,6 +166,22 @@ class ReferencePath:
         sigma = s - self._seg_start[i]
         inside = (s >= 0.0) & (s <= self.length_m)
         return np.where(inside, self._k0[i] + self._dk[i] * sigma, 0.0)
+
+    def curvature_at(self, s_m: float) -> float:
+        """:meth:`curvature` at one progress [m], in plain floats.
+
+        Examples
+        --------
+        >>> path = ReferencePath([PathSegment.straight(10.0), PathSegment.arc(20.0, 1.0)])
+        >>> path.curvature_at(5.0), path.curvature_at(15.0), path.curvature_at(-1.0)
+        (0.0, 0.05, 0.0)
+        """
+        if not 0.0 <= s_m <= self.length_m:
+            return 0.0
+        j = min(max(bisect.bisect_right(self._py_anchor_s, s_m) - 1, 0),
+                len(self._py_anchor_s) - 2)
+        _, _, _, start, k0, dk, _ = self._py_anchors[j]
+        return k0 + dk * (s_m - start)
 
     def heading(self, s_m: np.ndarray | float) -> np.ndarray:
         """Path heading ψ_path(s) [rad] (continuous, not wrapped)."""
@@ -196,41 +225,110 @@ class ReferencePath:
 
     def _frame_scalar(self, s: float) -> tuple[float, float, float, float]:
         """Plain-float version of :meth:`_frame` for one point."""
-        seg_start, k0s, dks, psi0s, anchor_s, anchor_xy, gauss = self._py
         clamped = min(max(s, 0.0), self.length_m)
-        i = min(max(bisect.bisect_right(seg_start, clamped) - 1, 0), len(k0s) - 1)
-        j = min(max(bisect.bisect_right(anchor_s, clamped) - 1, 0), len(anchor_s) - 2)
-        start, k0, dk, psi0 = seg_start[i], k0s[i], dks[i], psi0s[i]
-        a = anchor_s[j]
-        half, mid = 0.5 * (clamped - a), 0.5 * (clamped + a)
-        x, y = anchor_xy[j]
-        for node, weight in gauss:
-            sigma = mid + half * node - start
-            psi = psi0 + k0 * sigma + 0.5 * dk * sigma * sigma
-            x += half * weight * math.cos(psi)
-            y += half * weight * math.sin(psi)
+        j = min(max(bisect.bisect_right(self._py_anchor_s, clamped) - 1, 0),
+                len(self._py_anchor_s) - 2)
+        a, x, y, start, k0, dk, psi0 = self._py_anchors[j]
         sigma = clamped - start
         heading = psi0 + k0 * sigma + 0.5 * dk * sigma * sigma
+        if dk == 0.0:
+            # Straight or arc: the quadrature's integral in closed form, the chord from the
+            # anchor, 2 sin(κΔ/2)/κ long, along the heading at the midpoint (equal to the
+            # 8-point rule to rounding).
+            delta = clamped - a
+            half_turn = 0.5 * k0 * delta
+            chord = delta if half_turn == 0.0 else delta * math.sin(half_turn) / half_turn
+            mid_heading = heading - half_turn
+            x += chord * math.cos(mid_heading)
+            y += chord * math.sin(mid_heading)
+        else:
+            half, mid = 0.5 * (clamped - a), 0.5 * (clamped + a)
+            for node, weight in self._py_gauss:
+                sigma_node = mid + half * node - start
+                psi = psi0 + k0 * sigma_node + 0.5 * dk * sigma_node * sigma_node
+                x += half * weight * math.cos(psi)
+                y += half * weight * math.sin(psi)
+        if s == clamped:
+            return x, y, heading, k0 + dk * sigma
         beyond = s - clamped
-        kappa = k0 + dk * sigma if beyond == 0.0 else 0.0
-        return x + beyond * math.cos(heading), y + beyond * math.sin(heading), heading, kappa
+        return x + beyond * math.cos(heading), y + beyond * math.sin(heading), heading, 0.0
 
-    def _to_frenet_scalar(self, px: float, py: float) -> tuple[float, float]:
-        k = int(np.argmin((self._table_xy[:, 0] - px) ** 2 + (self._table_xy[:, 1] - py) ** 2))
-        heading = float(self._table_heading[k])
-        s = float(self._table_s[k]) + (px - self._table_xy[k, 0]) * math.cos(heading) + (
-            py - self._table_xy[k, 1]
-        ) * math.sin(heading)
-        for _ in range(30):
+    def _newton_scalar(
+        self, px: float, py: float, s: float, max_iterations: int
+    ) -> tuple[float, float, float, bool]:
+        """Foot point of ``(px, py)`` by Newton from ``s``: ``(s, d, heading, converged)``."""
+        for _ in range(max_iterations):
             cx, cy, heading, kappa = self._frame_scalar(s)
             tx, ty = math.cos(heading), math.sin(heading)
             ex, ey = px - cx, py - cy
-            step = (ex * tx + ey * ty) / max(1.0 - kappa * (-ex * ty + ey * tx), 0.1)
+            d = -ex * ty + ey * tx
+            # Foot point condition (P − C(s))·t(s) = 0; its derivative is −(1 − κ d).
+            step = (ex * tx + ey * ty) / max(1.0 - kappa * d, 0.1)
             s += step
             if abs(step) < 1e-9:
-                break
+                # At the converged foot point, a step this short moves d by O(κ·step²) (below
+                # rounding) and turns the heading by κ·step: no need to evaluate the frame again.
+                return s, d, heading + kappa * step, True
         cx, cy, heading, _ = self._frame_scalar(s)
-        return s, -(px - cx) * math.sin(heading) + (py - cy) * math.cos(heading)
+        return s, -(px - cx) * math.sin(heading) + (py - cy) * math.cos(heading), heading, False
+
+    def _to_frenet_scalar(self, px: float, py: float) -> tuple[float, float, float]:
+        """Global projection of one point: nearest 0.5 m table entry, then Newton."""
+        k = int(np.argmin((self._table_xy[:, 0] - px) ** 2 + (self._table_xy[:, 1] - py) ** 2))
+        heading = float(self._table_heading[k])
+        table_x, table_y = self._table_xy[k].tolist()
+        s = float(self._table_s[k]) + (px - table_x) * math.cos(heading) + (
+            py - table_y
+        ) * math.sin(heading)
+        s, d, heading, _ = self._newton_scalar(px, py, s, 30)
+        return s, d, heading
+
+    def to_frenet_point(
+        self, x_m: float, y_m: float, psi_rad: float = 0.0, s_guess_m: float | None = None
+    ) -> tuple[float, float, float]:
+        """One Cartesian pose → Frenet pose in plain floats, optionally warm-started.
+
+        The same projection as :meth:`to_frenet` (equal to rounding), without numpy's per-call
+        overhead. With ``s_guess_m`` (e.g. the point's foot point one time step earlier) Newton
+        starts there instead of at the nearest table entry; its result is kept only if it
+        converges within a few iterations, no more than 5 m from the guess and closer to the path
+        than half its smallest radius of curvature (where the foot point is unique, for paths that
+        do not come back near themselves); otherwise the global search answers.
+
+        Parameters
+        ----------
+        x_m, y_m, psi_rad
+            Cartesian position [m] and heading [rad].
+        s_guess_m
+            Start of the local search [m], or None for the global search.
+
+        Returns
+        -------
+        s, d, dpsi
+            Progress [m], lateral offset [m] (left +), heading error wrapped to (−π, π] [rad].
+
+        Examples
+        --------
+        >>> path = ReferencePath([PathSegment.straight(50.0)])
+        >>> s, d, dpsi = path.to_frenet_point(20.0, 1.5, 0.1, s_guess_m=19.0)
+        >>> round(s, 12), round(d, 12), round(dpsi, 12)
+        (20.0, 1.5, 0.1)
+        """
+        px, py = float(x_m), float(y_m)
+        if s_guess_m is not None:
+            s, d, heading, converged = self._newton_scalar(
+                px, py, float(s_guess_m), _WARM_START_ITERATIONS
+            )
+            if not (
+                converged
+                and abs(s - s_guess_m) <= _WARM_START_MAX_JUMP_M
+                and abs(d) * self._max_abs_curvature <= 0.5
+            ):
+                s, d, heading = self._to_frenet_scalar(px, py)
+        else:
+            s, d, heading = self._to_frenet_scalar(px, py)
+        error = float(psi_rad) - heading
+        return s, d, math.atan2(math.sin(error), math.cos(error))
 
     def position(self, s_m: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """Cartesian centreline point at progress ``s_m`` [m]; returns ``(x, y)`` arrays."""
@@ -295,7 +393,8 @@ class ReferencePath:
                                                                  strict=True)]
             s = np.array([p[0] for p in pairs])
             d = np.array([p[1] for p in pairs])
-            dpsi = np.angle(np.exp(1j * (psi.reshape(-1) - self.heading(s))))
+            heading = np.array([p[2] for p in pairs])
+            dpsi = np.angle(np.exp(1j * (psi.reshape(-1) - heading)))
             return s.reshape(shape), d.reshape(shape), dpsi.reshape(shape)
         nearest = np.empty(px.size, dtype=int)
         chunk = 2048

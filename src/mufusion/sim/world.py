@@ -7,21 +7,58 @@ The footprint is the vehicle's ``length × width`` rectangle centred midway betw
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from mufusion.road import Obstacle, Road, footprint_clearance_m, obstacle_active
+from mufusion.road import (
+    Obstacle,
+    PointTracker,
+    Road,
+    footprint_lane_margins,
+    obstacle_active,
+    obstacle_corners,
+    rectangle_corner_points,
+    signed_clearance_points,
+)
+from mufusion.road.geometry import Point
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import N_STATES, State
-from mufusion.vehicle.plant import PlantState, axle_positions
+from mufusion.vehicle.plant import PlantState
 
 
 @dataclass(frozen=True)
 class FootprintStatus:
-    """Where the vehicle's footprint is, at one instant."""
+    """Where the vehicle's footprint is, at one instant.
+
+    Attributes
+    ----------
+    mu_front, mu_rear
+        True friction under the front and the rear axle [-].
+    obstacle_active
+        Whether any obstacle is present.
+    clearance_m
+        Smallest signed clearance to an active obstacle [m] (NaN without one).
+    in_collision
+        Clearance ≤ 0.
+    passed_obstacle
+        The footprint's rear is past an active obstacle's far end.
+    lane_margin_m
+        Smallest signed distance of the footprint's corners to the ego lane's edges [m]:
+        positive inside, negative by how far the deepest corner is outside
+        (:func:`~mufusion.road.lanes.lane_margin_m`).
+    lane_excursion_m
+        ``max(0, −lane_margin_m)`` [m].
+    opposing_depth_m
+        How far the deepest corner lies left of the centre line [m], 0 if none.
+    road_margin_m
+        As ``lane_margin_m`` against the road's outer edges [m].
+    left_lane, in_opposing_lane, off_road
+        ``lane_margin_m < 0``, ``opposing_depth_m > 0``, ``road_margin_m < 0``.
+    """
 
     mu_front: float
     mu_rear: float
@@ -31,11 +68,31 @@ class FootprintStatus:
     passed_obstacle: bool
     left_lane: bool
     in_opposing_lane: bool
+    lane_margin_m: float
+    lane_excursion_m: float
+    opposing_depth_m: float
+    road_margin_m: float
+    off_road: bool
+
+
+@dataclass(frozen=True)
+class _Trackers:
+    """Warm starts of the projections of the vehicle's points that move with it."""
+
+    cog: PointTracker
+    centre: PointTracker
+    front_axle: PointTracker
+    rear_axle: PointTracker
+    corners: tuple[PointTracker, ...]
 
 
 @dataclass(frozen=True)
 class World:
     """A road and the conversion of plant states into what the planner and metrics need.
+
+    The projections of the vehicle's points (centre of gravity, axles, footprint centre and
+    corners) start from where each point was projected last (one :class:`PointTracker` each):
+    the only state a world holds, and it does not change any result beyond rounding.
 
     Parameters
     ----------
@@ -47,6 +104,22 @@ class World:
 
     road: Road
     to_planner_obstacle: Callable[[Obstacle], Any]
+    _trackers: _Trackers = field(init=False, repr=False, compare=False)
+    _obstacle_points: tuple[tuple[Point, ...], ...] = field(
+        init=False, repr=False, compare=False
+    )
+
+    def __post_init__(self) -> None:
+        path = self.road.path
+        object.__setattr__(self, "_trackers", _Trackers(
+            PointTracker(path), PointTracker(path), PointTracker(path), PointTracker(path),
+            tuple(PointTracker(path) for _ in range(4)),
+        ))
+        # Obstacles do not move: their corners once, as plain floats for the per-tick clearance.
+        object.__setattr__(self, "_obstacle_points", tuple(
+            tuple((float(x), float(y)) for x, y in obstacle_corners(o, path).tolist())
+            for o in self.road.obstacles
+        ))
 
     @property
     def road_length_m(self) -> float:
@@ -55,6 +128,10 @@ class World:
     def curvature(self, s_m: np.ndarray) -> np.ndarray:
         """Reference-path curvature [1/m] at progress ``s_m``."""
         return self.road.curvature(s_m)
+
+    def curvature_at(self, s_m: float) -> float:
+        """Reference-path curvature [1/m] at one progress [m] (plain float; once per tick)."""
+        return self.road.path.curvature_at(s_m)
 
     def friction(self, s_m: np.ndarray) -> np.ndarray:
         """True friction along the ego-lane centre at progress ``s_m``."""
@@ -75,11 +152,9 @@ class World:
 
     def frenet_state(self, x_plant: np.ndarray) -> np.ndarray:
         """The planner's state ``(s, d, Δψ, ψ̇, v_x, v_y)`` of a plant state."""
-        s, d, dpsi = self.road.to_frenet(
-            x_plant[PlantState.X], x_plant[PlantState.Y], x_plant[PlantState.PSI]
-        )
+        s, d, dpsi = self._trackers.cog.to_frenet(*self.pose(x_plant))
         xf = np.empty(N_STATES)
-        xf[State.s], xf[State.d], xf[State.dpsi] = float(s), float(d), float(dpsi)
+        xf[State.s], xf[State.d], xf[State.dpsi] = s, d, dpsi
         xf[State.psidot] = x_plant[PlantState.YAW_RATE]
         xf[State.vx] = x_plant[PlantState.VX]
         xf[State.vy] = x_plant[PlantState.VY]
@@ -89,11 +164,20 @@ class World:
         self, x_plant: np.ndarray, params: VehicleParams
     ) -> tuple[float, float]:
         """True friction under the front and the rear axle."""
-        front, rear = axle_positions(x_plant, params)
-        mu = self.road.mu_at_xy(
-            np.array([front[0], rear[0]]), np.array([front[1], rear[1]])
-        )
-        return float(mu[0]), float(mu[1])
+        return self._mu_under_axles(self.pose(x_plant), params)
+
+    def _mu_under_axles(
+        self, pose: tuple[float, float, float], params: VehicleParams
+    ) -> tuple[float, float]:
+        # The axle centres as in vehicle.plant.axle_positions, in plain floats.
+        x, y, psi = pose
+        c, s = math.cos(psi), math.sin(psi)
+        front_x, front_y = x + params.cog_to_front_axle_m * c, y + params.cog_to_front_axle_m * s
+        rear_x, rear_y = x - params.cog_to_rear_axle_m * c, y - params.cog_to_rear_axle_m * s
+        s_f, d_f, _ = self._trackers.front_axle.to_frenet(front_x, front_y)
+        s_r, d_r, _ = self._trackers.rear_axle.to_frenet(rear_x, rear_y)
+        friction = self.road.friction
+        return friction.mu_at_point(s_f, d_f), friction.mu_at_point(s_r, d_r)
 
     def active_obstacles(self, t_s: float, s_ego_m: float) -> list[Obstacle]:
         return [o for o in self.road.obstacles if bool(obstacle_active(o, s_ego_m, t_s))]
@@ -119,31 +203,44 @@ class World:
         s_ego_m: float,
         params: VehicleParams,
     ) -> FootprintStatus:
-        """Lane, opposing-lane and obstacle status of the footprint at ``pose``."""
+        """Lane, road, opposing-lane and obstacle status of the footprint at ``pose``.
+
+        The footprint is the ``length × width`` rectangle centred midway between the axles; the
+        lane quantities come from the Frenet offsets of its four corners.
+        """
         x, y, psi = pose
         shift = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
-        cx, cy = x + shift * np.cos(psi), y + shift * np.sin(psi)
-        s_c, d_c, dpsi_c = self.road.to_frenet(cx, cy, psi)
-        length, width = params.length_m, params.width_m
-        active = self.active_obstacles(t_s, s_ego_m)
-        clearance = np.inf
+        cx, cy = x + shift * math.cos(psi), y + shift * math.sin(psi)
+        s_c, _, _ = self._trackers.centre.to_frenet(cx, cy, psi)
+        length, width, lane_width = params.length_m, params.width_m, self.road.lane_width_m
+        corners = rectangle_corner_points(cx, cy, psi, length, width)
+        corner_d = [
+            tracker.to_frenet(px, py)[1]
+            for tracker, (px, py) in zip(self._trackers.corners, corners, strict=True)
+        ]
+        clearance = math.inf
         passed = False
-        for obstacle in active:
-            c = float(footprint_clearance_m(obstacle, self.road.path, cx, cy, psi, length, width))
-            clearance = min(clearance, c)
-            passed |= float(s_c) - 0.5 * length > obstacle.s_m + 0.5 * obstacle.length_m
-        mu_f, mu_r = self.friction_under_axles(
-            np.array([x, y, psi] + [0.0] * (len(PlantState) - 3)), params
-        )
+        any_active = False
+        for obstacle, points in zip(self.road.obstacles, self._obstacle_points, strict=True):
+            if not bool(obstacle_active(obstacle, s_ego_m, t_s)):
+                continue
+            any_active = True
+            clearance = min(clearance, signed_clearance_points(corners, points))
+            passed |= s_c - 0.5 * length > obstacle.s_m + 0.5 * obstacle.length_m
+        mu_f, mu_r = self._mu_under_axles(pose, params)
+        lanes = footprint_lane_margins(corner_d, lane_width)
         return FootprintStatus(
             mu_front=mu_f,
             mu_rear=mu_r,
-            obstacle_active=bool(active),
-            clearance_m=float(clearance) if np.isfinite(clearance) else float("nan"),
-            in_collision=bool(clearance <= 0.0),
-            passed_obstacle=bool(passed),
-            left_lane=bool(self.road.left_ego_lane(s_c, d_c, dpsi_c, length, width)),
-            in_opposing_lane=bool(
-                self.road.entered_opposing_lane(s_c, d_c, dpsi_c, length, width)
-            ),
+            obstacle_active=any_active,
+            clearance_m=clearance if math.isfinite(clearance) else float("nan"),
+            in_collision=clearance <= 0.0,
+            passed_obstacle=passed,
+            left_lane=lanes.left_lane,
+            in_opposing_lane=lanes.in_opposing_lane,
+            lane_margin_m=lanes.lane_margin_m,
+            lane_excursion_m=lanes.lane_excursion_m,
+            opposing_depth_m=lanes.opposing_depth_m,
+            road_margin_m=lanes.road_margin_m,
+            off_road=lanes.off_road,
         )
