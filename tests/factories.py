@@ -38,7 +38,9 @@ def _defaults(record_type: type) -> dict[str, Any]:
 
 def tick(**values: Any) -> Tick:
     """A controller tick: zeros, no flags, NaN clearance, unless given."""
-    return Tick(**{**_defaults(Tick), "clearance_m": math.nan, **values})
+    base = {**_defaults(Tick), "clearance_m": math.nan, "lane_margin_m": 0.45,
+            "road_margin_m": 2.2}
+    return Tick(**{**base, **values})
 
 
 def ticks(n: int, dt_s: float = 0.02, **columns: Any) -> list[Tick]:

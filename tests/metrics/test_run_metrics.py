@@ -52,11 +52,33 @@ def test_clearance_only_counts_once_passed() -> None:
 def test_lane_flags_and_offset() -> None:
     d = np.zeros(50)
     d[20] = -2.5
-    opposing = np.zeros(50, bool)
-    opposing[21] = True
-    m = compute_metrics(_log(d_m=d, left_lane=opposing, in_opposing_lane=opposing))
+    margin = np.full(50, 0.45)
+    margin[20:23] = [-0.2, -0.05, 0.1]
+    opposing = np.zeros(50)
+    opposing[21] = 0.03
+    m = compute_metrics(_log(d_m=d, lane_margin_m=margin, opposing_depth_m=opposing))
     assert m.max_abs_lateral_offset_m == 2.5
     assert m.left_lane and m.entered_opposing_lane
+    # Graded: 20 cm deepest, two ticks (0.04 s) outside, 3 cm into the opposing lane.
+    assert m.max_lane_excursion_m == pytest.approx(0.2)
+    assert m.min_lane_margin_m == pytest.approx(-0.2)
+    assert m.time_outside_lane_s == pytest.approx(2 * 0.02)
+    assert m.max_opposing_lane_depth_m == pytest.approx(0.03)
+    inside = compute_metrics(_log(lane_margin_m=np.linspace(0.4, 0.01, 50)))
+    assert not inside.left_lane and inside.max_lane_excursion_m == 0.0
+    assert inside.min_lane_margin_m == pytest.approx(0.01)
+
+
+def test_spin_and_body_slip() -> None:
+    slip = np.zeros(50)
+    slip[30] = 0.3
+    calm = compute_metrics(_log(body_slip_rad=slip))
+    assert calm.max_body_slip_rad == pytest.approx(0.3) and not calm.spun
+    slip[31] = -0.5
+    assert compute_metrics(_log(body_slip_rad=slip)).spun
+    # Near standstill a large angle means nothing.
+    slow = compute_metrics(_log(body_slip_rad=slip, speed_mps=np.full(50, 1.0)))
+    assert slow.max_body_slip_rad == 0.0 and not slow.spun
 
 
 def test_utilization_vs_gt_and_force_excess() -> None:

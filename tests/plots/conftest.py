@@ -146,6 +146,10 @@ def make_log(name: str = "turn", config: str = "F", duration_s: float = 4.0,
             in_collision=bool(collided[i]),
             passed_obstacle=bool(obstacles) and s[i] > obstacles[0].s_m,
             left_lane=bool(abs(d[i]) > w / 2 - WIDTH_M / 2), in_opposing_lane=bool(d[i] > w / 2),
+            lane_margin_m=w / 2 - WIDTH_M / 2 - abs(d[i]),
+            lane_excursion_m=max(0.0, abs(d[i]) - (w / 2 - WIDTH_M / 2)),
+            opposing_depth_m=max(0.0, d[i] + WIDTH_M / 2 - w / 2), road_margin_m=1.0,
+            off_road=False,
         ))
 
     mu_hat_level = {"GT": None, "L": 0.8, "P": 0.55, "F": 0.7, "F-safe": 0.6}.get(config, 0.7)
@@ -172,7 +176,8 @@ def make_log(name: str = "turn", config: str = "F", duration_s: float = 4.0,
         ))
         log.append(PlanningStep(
             step=step, t_s=t0, s_m=s[i0], mode="cruise", status=0, ok=True, fallback=False,
-            sampled_reinit=False, local_available=False, local_mu=np.nan,
+            fallback_reason="", sampled_reinit=False, local_available=False, local_mu=np.nan,
+            estimate_source="current", estimate_age_s=0.0,
         ))
         log.append(StepTiming(step=step, t_s=t0, solve_ms=5.0, step_ms=6.0))
         mu_grid = np.interp(s[i0] + grid, friction["s_m"], friction["mu"])

@@ -28,7 +28,25 @@ class RunMetrics:
     max_abs_lateral_offset_m
         Largest ``|d|`` of the vehicle's reference point from the ego-lane centre.
     left_lane, entered_opposing_lane
-        Whether any corner of the footprint left the ego lane / entered the opposing lane.
+        Whether any corner of the footprint left the ego lane / entered the opposing lane
+        (``max_lane_excursion_m > 0`` / ``max_opposing_lane_depth_m > 0``).
+    max_lane_excursion_m
+        Deepest footprint point outside the ego lane [m]; 0 if it never left.
+    time_outside_lane_s
+        Time with some of the footprint outside the ego lane [s].
+    min_lane_margin_m
+        Smallest distance of the footprint to an ego-lane edge [m]; negative when outside.
+    max_opposing_lane_depth_m
+        How deep the footprint reached into the opposing lane [m]; 0 if never.
+    max_body_slip_rad
+        Largest ``|β| = |atan2(v_y, v_x)|`` [rad] while moving faster than 2 m/s.
+    spun
+        ``max_body_slip_rad`` above :data:`SPIN_BODY_SLIP_RAD`, or a heading error to the road
+        above π/2: the vehicle lost its yaw stability.
+    off_road
+        Whether any of the footprint left the road (both lanes).
+    max_front_utilization
+        Largest realised front-tire utilisation ``|F_f| / (μ F_z)`` [-] (1: the tires slide).
     planned_utilization_at_comparison
         Largest planned front-force utilisation ``|F_f| / F_zf`` over the plan made at the
         comparison instant (the paper's Fig. 3k / 4k); ``None`` if no plan was made then.
@@ -64,6 +82,14 @@ class RunMetrics:
     max_abs_lateral_offset_m: float
     left_lane: bool
     entered_opposing_lane: bool
+    max_lane_excursion_m: float
+    time_outside_lane_s: float
+    min_lane_margin_m: float
+    max_opposing_lane_depth_m: float
+    max_body_slip_rad: float
+    spun: bool
+    off_road: bool
+    max_front_utilization: float
     planned_utilization_at_comparison: float | None
     utilization_vs_gt: float | None
     max_force_excess: float
@@ -139,8 +165,7 @@ def compute_metrics(log: RunLog) -> RunMetrics:
         impact_speed_mps=impact,
         min_clearance_m=min_clearance,
         max_abs_lateral_offset_m=float(np.max(np.abs(ts["d_m"]))),
-        left_lane=bool(ts["left_lane"].astype(bool).any()),
-        entered_opposing_lane=bool(ts["in_opposing_lane"].astype(bool).any()),
+        **_graded(ts, 1.0 / log.meta.rates.controller_hz),
         planned_utilization_at_comparison=_planned_utilization(log.plans, t_c),
         utilization_vs_gt=None,
         max_force_excess=_max_force_excess(log.plans),
@@ -156,6 +181,36 @@ def compute_metrics(log: RunLog) -> RunMetrics:
         duration_s=float(ts["t_s"].iloc[-1]),
         **_reliability(log),
     )
+
+
+SPIN_BODY_SLIP_RAD = 0.35
+"""Body slip [rad] (20°) beyond which a run counts as spun: far past the ≈ 0.1 rad a stability
+controller starts intervening at, and more than a driver recovers without counter-steer."""
+SLIP_MIN_SPEED_MPS = 2.0
+"""Body slip is not judged below this speed [m/s] (its angle means nothing near standstill)."""
+
+
+def _graded(ts: pd.DataFrame, tick_s: float) -> dict[str, Any]:
+    """Graded lane and stability outcomes from the time series (one row per control tick)."""
+    margin = ts["lane_margin_m"].to_numpy(dtype=float)
+    opposing = ts["opposing_depth_m"].to_numpy(dtype=float)
+    moving = ts["speed_mps"].to_numpy(dtype=float) > SLIP_MIN_SPEED_MPS
+    slip = np.abs(ts["body_slip_rad"].to_numpy(dtype=float))[moving]
+    max_slip = float(slip.max()) if slip.size else 0.0
+    heading = float(np.abs(ts["dpsi_rad"].to_numpy(dtype=float)).max())
+    util = ts["util_front"].to_numpy(dtype=float)
+    return {
+        "left_lane": bool((margin < 0.0).any()),
+        "entered_opposing_lane": bool((opposing > 0.0).any()),
+        "max_lane_excursion_m": float(max(0.0, -margin.min())),
+        "time_outside_lane_s": float((margin < 0.0).sum() * tick_s),
+        "min_lane_margin_m": float(margin.min()),
+        "max_opposing_lane_depth_m": float(max(0.0, opposing.max())),
+        "max_body_slip_rad": max_slip,
+        "spun": bool(max_slip > SPIN_BODY_SLIP_RAD or heading > np.pi / 2),
+        "off_road": bool(ts["off_road"].astype(bool).any()),
+        "max_front_utilization": float(np.nanmax(util)) if np.isfinite(util).any() else 0.0,
+    }
 
 
 # Event kinds that report an exception inside the loop (see mufusion.sim.loop).

@@ -96,6 +96,11 @@ class Recorder:
                 passed_obstacle=status.passed_obstacle,
                 left_lane=status.left_lane,
                 in_opposing_lane=status.in_opposing_lane,
+                lane_margin_m=status.lane_margin_m,
+                lane_excursion_m=status.lane_excursion_m,
+                opposing_depth_m=status.opposing_depth_m,
+                road_margin_m=status.road_margin_m,
+                off_road=status.off_road,
             )
         )
         return status

@@ -70,6 +70,12 @@ class Tick:
     passed_obstacle: bool
     left_lane: bool
     in_opposing_lane: bool
+    lane_margin_m: float
+    """Smallest signed distance of the footprint to the ego lane's edges (negative outside)."""
+    lane_excursion_m: float
+    opposing_depth_m: float
+    road_margin_m: float
+    off_road: bool
 
 
 @dataclass(frozen=True)
