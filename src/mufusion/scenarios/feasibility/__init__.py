@@ -1,0 +1,123 @@
+"""Physics feasibility oracle: can a point mass on the true friction do what a scenario asks?
+
+Planner-independent pure functions over plain numbers (SI units in every name):
+:func:`turn_feasibility` (slow from the entry speed to the curve's limit speed ``√(λ μ g R)``
+before the curve, along the lane centre and cutting the curve within the lane's play) and
+:func:`popup_feasibility` (stop short of the obstacle, or steer around it). Each returns a frozen
+dataclass with a :class:`FeasibilityClass`, a signed margin in m/s (the highest entry speed at
+which the manoeuvre still fits, minus the entry speed) and the quantities used.
+:func:`classify_scenario` reads them off a :class:`~mufusion.scenarios.config.ScenarioConfig`.
+Derivation: ``docs/feasibility.md``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from mufusion.planner import PlannerConfig
+from mufusion.scenarios.config import ScenarioConfig
+from mufusion.scenarios.feasibility.common import (
+    MARGINAL_BAND_FRACTION,
+    FeasibilityClass,
+    braking_limited_speed_mps,
+    classify_speed_margin,
+)
+from mufusion.scenarios.feasibility.popup import (
+    BrakingEnvelope,
+    EvasionEnvelope,
+    PopupFeasibility,
+    popup_feasibility,
+)
+from mufusion.scenarios.feasibility.turn import (
+    TurnFeasibility,
+    TurnLimit,
+    clothoid_offsets_m,
+    effective_radius_m,
+    turn_feasibility,
+)
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import secant_stiffness_factor
+
+__all__ = [
+    "MARGINAL_BAND_FRACTION",
+    "BrakingEnvelope",
+    "EvasionEnvelope",
+    "FeasibilityClass",
+    "PopupFeasibility",
+    "TurnFeasibility",
+    "TurnLimit",
+    "braking_limited_speed_mps",
+    "classify_scenario",
+    "classify_speed_margin",
+    "clothoid_offsets_m",
+    "effective_radius_m",
+    "popup_feasibility",
+    "summary_fields",
+    "turn_feasibility",
+]
+
+
+def classify_scenario(
+    cfg: ScenarioConfig, params: VehicleParams
+) -> TurnFeasibility | PopupFeasibility:
+    """The oracle's verdict on one scenario variant.
+
+    Dead times are the vehicle's actuator time constants (brakes: ``torque_time_constant_s``,
+    steering: ``steer_time_constant_s``); the brake limit is the wheel-torque capacity; the
+    evasion keeps the planner's obstacle margin and may use the whole road (ego and opposing
+    lane), as the pop-up planner does.
+
+    Examples
+    --------
+    >>> from mufusion.scenarios.config import load_scenario
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> classify_scenario(load_scenario("turn"), TRUCK).feasibility_class.value
+    'feasible'
+    """
+    lam = cfg.planner.utilization_factor
+    max_decel = (params.max_brake_torque_front_nm + params.max_brake_torque_rear_nm) / (
+        params.wheel_radius_m * params.mass_kg)
+    if cfg.name == "turn":
+        return turn_feasibility(
+            entry_speed_mps=cfg.initial_speed_mps, radius_m=cfg.turn.radius_m,
+            turn_angle_rad=cfg.turn.angle_rad, turn_start_ahead_m=cfg.turn.start_ahead_m,
+            clothoid_m=cfg.turn.clothoid_m, mu_before=cfg.friction.mu_before,
+            mu_turn=cfg.friction.mu_turn, friction_change_ahead_m=cfg.friction.change_ahead_m,
+            utilization_factor=lam, dead_time_s=params.torque_time_constant_s,
+            lane_width_m=cfg.road.lane_width_m, vehicle_width_m=params.width_m,
+            vehicle_length_m=params.length_m, max_decel_mps2=max_decel,
+        )
+    ob = cfg.obstacle
+    if ob is None:
+        raise ValueError("obstacle: the popup scenario needs an [obstacle] table")
+    lane, half_w = cfg.road.lane_width_m, 0.5 * params.width_m
+    slip = 1.0 / (secant_stiffness_factor(params.tire, lam)
+                  * params.tire.cornering_stiffness_per_load_1_per_rad)
+    return popup_feasibility(
+        speed_mps=cfg.initial_speed_mps, mu=cfg.friction.mu, obstacle_distance_m=ob.distance_m,
+        obstacle_length_m=ob.length_m, obstacle_width_m=ob.width_m,
+        obstacle_offset_m=ob.lateral_offset_m, vehicle_width_m=params.width_m,
+        room_left_m=1.5 * lane - half_w, room_right_m=max(0.5 * lane - half_w, 0.0),
+        clearance_margin_m=PlannerConfig().obstacle_margin_m, utilization_factor=lam,
+        brake_dead_time_s=params.torque_time_constant_s,
+        steer_dead_time_s=params.steer_time_constant_s,
+        steer_rate_radps=params.max_steer_rate_radps, max_steer_rad=params.max_steer_rad,
+        wheelbase_m=params.wheelbase_m, slip_rad_per_g=slip, max_decel_mps2=max_decel,
+    )
+
+
+def summary_fields(result: TurnFeasibility | PopupFeasibility) -> dict[str, str | float | None]:
+    """The verdict as flat ``summary.json`` fields (a non-finite margin becomes ``None``).
+
+    Examples
+    --------
+    >>> from mufusion.scenarios.config import load_scenario
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> sorted(summary_fields(classify_scenario(load_scenario("popup"), TRUCK)))
+    ['feasibility', 'feasibility_margin_mps']
+    """
+    margin = result.margin_mps
+    return {
+        "feasibility": result.feasibility_class.value,
+        "feasibility_margin_mps": round(margin, 3) if math.isfinite(margin) else None,
+    }
