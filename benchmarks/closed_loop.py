@@ -24,6 +24,7 @@ from contextlib import contextmanager
 from typing import Any
 
 from mufusion.fusion.configurations import FrictionConfiguration
+
 from mufusion.planner import TrackingController, TractionAdaptivePlanner
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario

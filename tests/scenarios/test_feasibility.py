@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from mufusion.scenarios.config import load_scenario
+from mufusion.scenarios import load_scenario
 from mufusion.scenarios.feasibility import (
     FeasibilityClass,
     classify_scenario,

@@ -65,6 +65,9 @@ class RunMetrics:
         Planning steps that fell back to the shifted previous plan or a braking plan.
     sampling_reinits
         Planning steps whose initial guess came from the sampling augmentation.
+    feasibility, feasibility_margin_mps
+        The physics oracle's class of the variant (feasible / marginal / infeasible) and its
+        margin [m/s] (:mod:`mufusion.scenarios.feasibility`), from the run's metadata.
     faults_injected
         Faults the scenario injected (``[[faults]]``).
     estimate_fallbacks
@@ -99,6 +102,8 @@ class RunMetrics:
     sampling_reinits: int
     final_speed_mps: float
     duration_s: float
+    feasibility: str = "unknown"
+    feasibility_margin_mps: float | None = None
     faults_injected: int = 0
     estimate_fallbacks: int = 0
     component_errors: int = 0
@@ -179,6 +184,8 @@ def compute_metrics(log: RunLog) -> RunMetrics:
         ),
         final_speed_mps=float(ts["speed_mps"].iloc[-1]),
         duration_s=float(ts["t_s"].iloc[-1]),
+        feasibility=log.meta.feasibility,
+        feasibility_margin_mps=log.meta.feasibility_margin_mps,
         **_reliability(log),
     )
 

@@ -21,6 +21,7 @@ TABLE_COLUMNS: tuple[TableColumn, ...] = (
     TableColumn("scenario", "scenario", "text"),
     TableColumn("variant", "variant", "text"),
     TableColumn("config", "cfg", "text"),
+    TableColumn("feasibility", "physics", "text"),
     TableColumn("collision", "crash", "yes/no"),
     TableColumn("impact_speed_mps", "impact m/s"),
     TableColumn("min_clearance_m", "clear m"),

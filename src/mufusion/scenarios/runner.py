@@ -24,6 +24,7 @@ from mufusion.planner import (
 )
 from mufusion.road import Obstacle, Road, obstacle_corners
 from mufusion.scenarios.config import PopupScenario, TurnScenario, planner_lane_bounds_m
+from mufusion.scenarios.feasibility import classify_scenario, summary_fields
 from mufusion.sim.log import RunLog
 from mufusion.sim.loop import ClosedLoop
 from mufusion.sim.records import (
@@ -195,4 +196,5 @@ def run_meta(
         start_heading_rad=float(math.atan2(y[1] - y[0], x[1] - x[0])),
         comparison_time_s=cfg.comparison_time_s,
         duration_s=cfg.duration_s,
+        **summary_fields(classify_scenario(cfg, params)),
     )

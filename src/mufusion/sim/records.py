@@ -273,6 +273,11 @@ class RunMeta(_Meta):
     start_heading_rad: float
     comparison_time_s: float
     duration_s: float
+    feasibility: str = "unknown"
+    """The physics oracle's class of the variant: feasible, marginal, infeasible (or unknown)."""
+    feasibility_margin_mps: float | None = None
+    """The oracle's margin: highest entry speed at which the manoeuvre fits, minus the entry
+    speed [m/s]."""
 
     @property
     def label(self) -> str:

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 from mufusion.planner import PlannerConfig
-from mufusion.scenarios.config import ScenarioConfig
+from mufusion.scenarios.config import PopupScenario, TurnScenario
 from mufusion.scenarios.feasibility.common import (
     MARGINAL_BAND_FRACTION,
     FeasibilityClass,
@@ -58,7 +58,7 @@ __all__ = [
 
 
 def classify_scenario(
-    cfg: ScenarioConfig, params: VehicleParams
+    cfg: TurnScenario | PopupScenario, params: VehicleParams
 ) -> TurnFeasibility | PopupFeasibility:
     """The oracle's verdict on one scenario variant.
 
@@ -69,7 +69,7 @@ def classify_scenario(
 
     Examples
     --------
-    >>> from mufusion.scenarios.config import load_scenario
+    >>> from mufusion.scenarios import load_scenario
     >>> from mufusion.vehicle.params import TRUCK
     >>> classify_scenario(load_scenario("turn"), TRUCK).feasibility_class.value
     'feasible'
@@ -77,7 +77,7 @@ def classify_scenario(
     lam = cfg.planner.utilization_factor
     max_decel = (params.max_brake_torque_front_nm + params.max_brake_torque_rear_nm) / (
         params.wheel_radius_m * params.mass_kg)
-    if cfg.name == "turn":
+    if isinstance(cfg, TurnScenario):
         return turn_feasibility(
             entry_speed_mps=cfg.initial_speed_mps, radius_m=cfg.turn.radius_m,
             turn_angle_rad=cfg.turn.angle_rad, turn_start_ahead_m=cfg.turn.start_ahead_m,
@@ -88,8 +88,6 @@ def classify_scenario(
             vehicle_length_m=params.length_m, max_decel_mps2=max_decel,
         )
     ob = cfg.obstacle
-    if ob is None:
-        raise ValueError("obstacle: the popup scenario needs an [obstacle] table")
     lane, half_w = cfg.road.lane_width_m, 0.5 * params.width_m
     slip = 1.0 / (secant_stiffness_factor(params.tire, lam)
                   * params.tire.cornering_stiffness_per_load_1_per_rad)
@@ -111,7 +109,7 @@ def summary_fields(result: TurnFeasibility | PopupFeasibility) -> dict[str, str 
 
     Examples
     --------
-    >>> from mufusion.scenarios.config import load_scenario
+    >>> from mufusion.scenarios import load_scenario
     >>> from mufusion.vehicle.params import TRUCK
     >>> sorted(summary_fields(classify_scenario(load_scenario("popup"), TRUCK)))
     ['feasibility', 'feasibility_margin_mps']
