@@ -8,7 +8,7 @@ import pytest
 from factories import run_meta
 from mufusion.configurations import FrictionEstimate
 from mufusion.metrics import compute_metrics
-from mufusion.planner import Plan
+from mufusion.planner import Plan, PlannerObstacle
 from mufusion.road import FrictionMap, Obstacle, straight_road
 from mufusion.sim.log import load_run
 from mufusion.sim.loop import ClosedLoop, LoopRates
@@ -68,7 +68,7 @@ RATES = LoopRates(200.0, 50.0, 10.0)
 
 def _loop(obstacles=(), steer_rad=0.0, rates=RATES):
     road = straight_road(300.0, friction=FrictionMap.step(1.0, 0.5, 40.0), obstacles=obstacles)
-    world = World(road, to_planner_obstacle=lambda o: (o.s_m, o.d_m))
+    world = World(road, to_planner_obstacle=lambda o: PlannerObstacle(o.s_m, o.d_m, 1.0, 1.0))
     plant = Plant(TRUCK, initial_state(TRUCK, 20.0, 0.0, 0.0, 15.0), dt_s=1.0 / rates.plant_hz)
     planner, controller, friction = _Planner(), _Controller(steer_rad), _Friction()
     loop = ClosedLoop(

@@ -143,21 +143,27 @@ class Variant:
         return (*facts, extra) if extra is not None else facts
 
 
+PAPER_METHOD: tuple[str, ...] = ("probing.enabled=false", "lane_recovery.enabled=false")
+"""The paper's method: without our supervisory layers (friction probing, lane recovery), which
+go beyond it (:mod:`mufusion.sim.supervision`)."""
+
 TURN_SNAPSHOTS_M = (0.0, 15.0, 30.0, 55.0)
 POPUP_SNAPSHOTS_M = (0.0, 2.0, 18.0, 40.0)
 
 VARIANTS: tuple[Variant, ...] = (
-    Variant("turn-paper", "turn", "turn, paper settings", (), True, {}, TURN_SNAPSHOTS_M, C.L,
-            animate=True),
+    Variant("turn-paper", "turn", "turn, paper settings", PAPER_METHOD, True, {},
+            TURN_SNAPSHOTS_M, C.L, animate=True),
     # At μ = 1.0 the paper's rules give P 1 − 0.6/1.0 = −40 % and F ≈ −5 %.
-    Variant("popup-paper", "popup", "pop-up, paper settings (μ = 1.0)", (), True,
+    Variant("popup-paper", "popup", "pop-up, paper settings (μ = 1.0)", PAPER_METHOD, True,
             utilization_facts(-0.40, -0.05), POPUP_SNAPSHOTS_M, C.P, animate=True),
     # The authors' configuration (μ = 0.89): P −32.6 %, F −5.6 % exactly (Sec. IV-D).
-    Variant("popup-authors", "popup", "pop-up, the authors' μ = 0.89", ("friction.mu=0.89",),
-            True, utilization_facts(-0.326, -0.056), POPUP_SNAPSHOTS_M, C.P),
-    Variant("turn-car", "turn", "turn, passenger car", ("vehicle=car",), False, {},
+    Variant("popup-authors", "popup", "pop-up, the authors' μ = 0.89",
+            ("friction.mu=0.89", *PAPER_METHOD), True, utilization_facts(-0.326, -0.056),
+            POPUP_SNAPSHOTS_M, C.P),
+    Variant("turn-car", "turn", "turn, passenger car", ("vehicle=car", *PAPER_METHOD), False, {},
             TURN_SNAPSHOTS_M, C.L),
-    Variant("popup-car", "popup", "pop-up, passenger car", ("vehicle=car",), False, {},
+    Variant("popup-car", "popup", "pop-up, passenger car", ("vehicle=car", *PAPER_METHOD), False,
+            {},
             POPUP_SNAPSHOTS_M, C.P),
 )
 """The reproduction's variants, truck first; ``mufusion reproduce --no-car`` drops the car ones."""
@@ -181,4 +187,4 @@ def variant(key: str) -> Variant:
 
 def default_variant(scenario: str) -> Variant:
     """The paper-settings variant of a scenario kind (figures of a single run use its layout)."""
-    return next(v for v in VARIANTS if v.scenario == scenario and not v.overrides)
+    return next(v for v in VARIANTS if v.scenario == scenario and v.overrides == PAPER_METHOD)

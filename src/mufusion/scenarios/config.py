@@ -19,6 +19,7 @@ from mufusion.planner.safety import SafetySettings
 from mufusion.road import FrictionMap, Obstacle, Road, straight_road, turn_road
 from mufusion.sim.faults import Fault
 from mufusion.sim.loop import LoopRates
+from mufusion.sim.supervision import LaneRecoverySettings, ProbingSettings
 from mufusion.vehicle.params import VehicleParams
 
 VehicleName = Literal["truck", "car"]
@@ -155,6 +156,10 @@ class _Scenario(_Strict):
     """Faults to inject (``[[faults]]`` tables: kind, start_s, duration_s, delay_s)."""
     safety: SafetySettings = SafetySettings()
     """How the loop reacts to missing, stale or failing parts (:mod:`mufusion.sim.faults`)."""
+    probing: ProbingSettings = ProbingSettings()
+    """Active friction probing (beyond the paper, :mod:`mufusion.sim.supervision`)."""
+    lane_recovery: LaneRecoverySettings = LaneRecoverySettings()
+    """Relaxing μ̂ towards the posterior mean when no friction-limited plan keeps the lane."""
 
     @model_validator(mode="after")
     def _check_common(self) -> _Scenario:

@@ -19,6 +19,7 @@ from pydantic import BaseModel, TypeAdapter, ValidationError
 from mufusion.planner.safety import SafetySettings
 from mufusion.scenarios.config import SCENARIO_KINDS, PopupScenario, ScenarioConfig, TurnScenario
 from mufusion.sim.faults import Fault
+from mufusion.sim.supervision import LaneRecoverySettings, ProbingSettings
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -180,7 +181,9 @@ def _submodel(annotation: Any) -> type | None:
 
 
 # Dataclass annotations are strings under `from __future__ import annotations`.
-_DATACLASS_NAMES: dict[str, type] = {"SafetySettings": SafetySettings, "Fault": Fault}
+_DATACLASS_NAMES: dict[str, type] = {
+    c.__name__: c for c in (SafetySettings, Fault, ProbingSettings, LaneRecoverySettings)
+}
 
 
 def load_scenario(

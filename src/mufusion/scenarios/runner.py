@@ -125,6 +125,9 @@ def run_scenario(
         emergency_on_obstacle=isinstance(cfg, PopupScenario) and cfg.emergency_on_obstacle,
         faults=tuple(cfg.faults),
         safety=cfg.safety,
+        probing=cfg.probing,
+        lane_recovery=cfg.lane_recovery,
+        utilization_factor=planner.config.utilization_factor,
         meta=run_meta(cfg, configuration, params, road, planner.config),
     )
     return loop.run(cfg.duration_s, progress=progress, warmup_steps=WARMUP_PLANNING_STEPS)

@@ -10,24 +10,37 @@ What happens is written by a :class:`~mufusion.sim.recorder.Recorder` into one
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import time
-from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
 
 import numpy as np
 
 from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan, PlannerObstacle
-from mufusion.planner.ocp import PlannerMode
-from mufusion.sim.faults import Fault, SafetySettings, active_kinds, estimate_delay_s
+from mufusion.planner.safety import SafetySettings
+from mufusion.sim.components import (
+    Controller,
+    FrictionSource,
+    LoopRates,
+    Planner,
+    PlanningMode,
+    PlantModel,
+)
+from mufusion.sim.estimate_guard import EstimateGuard
+from mufusion.sim.faults import Fault, active_kinds, estimate_delay_s
 from mufusion.sim.log import RunLog
 from mufusion.sim.minimal_risk import minimal_risk_command
 from mufusion.sim.recorder import Recorder
 from mufusion.sim.records import RunMeta
+from mufusion.sim.supervision import (
+    LaneRecoverySettings,
+    Prober,
+    ProbingSettings,
+    lane_violation_m,
+    relaxed_estimate,
+)
 from mufusion.sim.world import World
 from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.params import VehicleParams
@@ -36,134 +49,8 @@ from mufusion.vehicle.plant import PlantOutput, PlantState
 
 _log = logging.getLogger(__name__)
 
-PlanningMode = PlannerMode
 MINIMAL_RISK_MODE: PlanningMode = "minimal_risk"
 """The planner's mode during the minimal-risk manoeuvre: brake to a stop in lane."""
-
-
-@dataclass(frozen=True)
-class LoopRates:
-    """Rates of the loop's components [Hz]; the plant rate must be a multiple of the others.
-
-    Raises
-    ------
-    ValueError
-        If a rate is not positive and finite, or the rates do not divide into whole steps
-        (the message names the rate).
-    """
-
-    plant_hz: float = 200.0
-    controller_hz: float = 50.0
-    planner_hz: float = 10.0
-
-    def __post_init__(self) -> None:
-        for name in ("plant_hz", "controller_hz", "planner_hz"):
-            value = getattr(self, name)
-            if not np.isfinite(value) or value <= 0:
-                raise ValueError(f"{name} must be a positive rate in Hz, got {value!r}")
-        _check_divides("controller_hz", self.controller_hz, "plant_hz", self.plant_hz)
-        _check_divides("planner_hz", self.planner_hz, "plant_hz", self.plant_hz)
-        _check_divides("planner_hz", self.planner_hz, "controller_hz", self.controller_hz)
-
-    @property
-    def controller_every(self) -> int:
-        return round(self.plant_hz / self.controller_hz)
-
-    @property
-    def planner_every(self) -> int:
-        return round(self.plant_hz / self.planner_hz)
-
-
-def _check_divides(name: str, value: float, base_name: str, base: float) -> None:
-    ratio = base / value
-    if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
-        raise ValueError(
-            f"{name} must divide {base_name}={base:g} Hz into whole steps, got {value:g} Hz"
-        )
-
-
-class FrictionSource(Protocol):
-    """A friction estimate over the grid ahead, once per planning step.
-
-    The interface of :class:`~mufusion.configurations.FrictionConfiguration`; a source of your
-    own plugs into :class:`ClosedLoop` by implementing these two calls.
-    """
-
-    def step(
-        self,
-        s_ahead_m: np.ndarray,
-        mu_true_ahead: np.ndarray,
-        utilization: float,
-        *,
-        camera_ok: bool = True,
-        t_s: float | None = None,
-    ) -> FrictionEstimate:
-        """The estimate at distances ``s_ahead_m`` ahead (``mu_true_ahead`` is the truth there,
-        ``utilization`` the peak realised tire utilization since the last step; ``camera_ok``
-        False while the camera is out)."""
-        ...
-
-    def observe(
-        self,
-        t_s: float,
-        utilization_front: float,
-        utilization_rear: float,
-        mu_front: float,
-        mu_rear: float,
-    ) -> None:
-        """Called after every plant step with the realised utilization and true μ per axle."""
-        ...
-
-
-class Planner(Protocol):
-    """A motion planner with :class:`~mufusion.planner.TractionAdaptivePlanner`'s step."""
-
-    def step(
-        self,
-        x0: np.ndarray,
-        t_s: float,
-        curvature_of_s: Callable[[np.ndarray], np.ndarray],
-        mu_hat_of_s: Callable[[np.ndarray], np.ndarray],
-        obstacles: Sequence[PlannerObstacle] = (),
-        mode: PlanningMode = "cruise",
-        reference_speed_mps: float = 10.0,
-        reference_d_m: float = 0.0,
-        lane_d_min_m: float | None = None,
-        lane_d_max_m: float | None = None,
-    ) -> Plan: ...
-
-
-class Controller(Protocol):
-    """Turns the current plan into actuator commands."""
-
-    def command(
-        self,
-        t_s: float,
-        x_frenet: np.ndarray,
-        steer_rad_now: float,
-        plan: Plan,
-        curvature_1pm_now: float = 0.0,
-    ) -> ActuatorCommand: ...
-
-
-class PlantModel(Protocol):
-    """The simulated vehicle (see :class:`~mufusion.vehicle.plant.Plant`)."""
-
-    @property
-    def x(self) -> np.ndarray: ...
-
-    def step(
-        self, command: ActuatorCommand, mu_front: float, mu_rear: float
-    ) -> PlantOutput: ...
-
-
-@dataclass(frozen=True)
-class _Anchored:
-    """A friction estimate and where and when it was made."""
-
-    t_s: float
-    s_m: float
-    estimate: FrictionEstimate
 
 
 @dataclass
@@ -194,15 +81,16 @@ class ClosedLoop:
         Faults to inject (:mod:`mufusion.sim.faults`).
     safety
         How the loop reacts to missing, stale or failing parts.
+    probing, lane_recovery
+        The supervisory behaviours of :mod:`mufusion.sim.supervision` (beyond the paper).
 
     Notes
     -----
     Reactions, each logged as an event (table ``events``):
 
     - The friction estimate handed to the planner must be finite and at most
-      ``safety.max_estimate_age_s`` old. Otherwise the last estimate that was (re-anchored at
-      the absolute positions it was made for) is used while it is young enough, else
-      ``safety.mu_floor`` over the whole horizon.
+      ``safety.max_estimate_age_s`` old (:class:`~mufusion.sim.estimate_guard.EstimateGuard`):
+      otherwise the last one that was, while young enough, else ``safety.mu_floor``.
     - A planning step without a usable plan (the solver failed, the planner raised or was made
       to fail) keeps the previous plan. After ``safety.max_consecutive_fallbacks`` such steps in
       a row, or at once when the friction source raises, the vehicle enters the minimal-risk
@@ -226,6 +114,9 @@ class ClosedLoop:
     emergency_on_obstacle: bool = False
     faults: Sequence[Fault] = ()
     safety: SafetySettings = field(default_factory=SafetySettings)
+    probing: ProbingSettings = field(default_factory=ProbingSettings)
+    lane_recovery: LaneRecoverySettings = field(default_factory=LaneRecoverySettings)
+    utilization_factor: float = 0.9
 
     def run(
         self,
@@ -248,11 +139,12 @@ class ClosedLoop:
             raise ValueError(f"duration_s must be > 0, got {duration_s!r}")
         log = RunLog(self.meta)
         self._recorder = Recorder(log, self.world, self.params, self.estimate_grid_m)
-        self._history: deque[_Anchored] = deque(maxlen=64)
-        self._last_valid: _Anchored | None = None
+        self._guard = EstimateGuard(self.estimate_grid_m, self.safety, self._recorder.event)
+        self._prober = Prober(self.probing, self.utilization_factor)
         self._consecutive_fallbacks = 0
         self._minimal_risk = False
         self._planner_usable = True
+        self._local_available = False
         for fault in self.faults:
             self._recorder.event(fault.start_s, "fault_scheduled", _describe(fault))
         try:
@@ -297,8 +189,7 @@ class ClosedLoop:
                 assert estimate is not None  # a planning step comes first (i = 0)
                 command = self._command(t, xf, x_plant, plan, estimate)
                 status = self._recorder.tick(
-                    t, x_plant, xf, command, estimate.local_available, last,
-                    "minimal_risk" if self._minimal_risk else "plan",
+                    t, x_plant, xf, command, estimate.local_available, last, self._control_mode()
                 )
                 if status.in_collision or s_ego >= road_end:
                     break
@@ -310,15 +201,26 @@ class ClosedLoop:
                 t + dt, last.utilization_front, last.utilization_rear, mu_front, mu_rear
             )
 
+    def _control_mode(self) -> str:
+        if self._minimal_risk:
+            return "minimal_risk"
+        return "probing" if self._prober.active else "plan"
+
     # -- one planning step ------------------------------------------------------------------
     def _planning_step(
         self, step: int, t: float, xf: np.ndarray, utilization: float, previous: Plan | None
     ) -> tuple[FrictionEstimate, Plan | None]:
         s_ego = float(xf[State.s])
         kinds = active_kinds(self.faults, t)
-        estimate, source, age = self._usable_estimate(t, s_ego, utilization, kinds)
+        fresh = self._estimate(t, s_ego, utilization, kinds)
+        estimate, source, age = self._guard.usable(
+            t, s_ego, fresh, delay_s=estimate_delay_s(self.faults, t),
+            corrupt="estimate_nan" in kinds,
+        )
+        self._local_available = estimate.local_available
         obstacles = self.world.planner_obstacles(t, s_ego, behind_m=self.params.length_m)
         mode = MINIMAL_RISK_MODE if self._minimal_risk else self._mode(obstacles)
+        self._consider_probe(t, xf, estimate, obstacles)
         started = time.perf_counter()
         plan: Plan | None = None
         reason = ""
@@ -327,6 +229,9 @@ class ClosedLoop:
         else:
             try:
                 plan = self._plan(xf, t, s_ego, estimate, obstacles, mode)
+                if self.lane_recovery.enabled and not self._minimal_risk:
+                    plan, estimate = self._recover_lane(t, xf, s_ego, plan, estimate, obstacles,
+                                                        mode)
             except Exception as exc:  # a planner that raises degrades, never ends the run
                 reason = f"planner raised {type(exc).__name__}: {exc}"
                 self._recorder.event(t, "planner_error", reason)
@@ -345,50 +250,56 @@ class ClosedLoop:
                                         "without a usable plan")
         return estimate, plan if plan is not None else previous
 
-    def _usable_estimate(
-        self, t: float, s_ego: float, utilization: float, kinds: frozenset[str]
-    ) -> tuple[FrictionEstimate, str, float]:
-        """The estimate the planner gets, where it came from, and its age [s]."""
-        fresh = self._estimate(t, s_ego, utilization, kinds)
-        if fresh is not None:
-            self._history.append(_Anchored(t, s_ego, fresh))
-        candidate, source = (None if fresh is None else _Anchored(t, s_ego, fresh)), "current"
-        delay = estimate_delay_s(self.faults, t)
-        if delay > 0.0 and self._history:
-            older = [a for a in self._history if a.t_s <= t - delay + 1e-9]
-            candidate, source = (older[-1] if older else self._history[0]), "delayed"
-        if candidate is not None and "estimate_nan" in kinds:
-            nan = np.full(np.shape(candidate.estimate.mu_hat), np.nan)
-            candidate = dataclasses.replace(
-                candidate, estimate=dataclasses.replace(candidate.estimate, mu_hat=nan)
-            )
-        max_age = self.safety.max_estimate_age_s
-        if candidate is not None and _finite(candidate) and t - candidate.t_s <= max_age + 1e-9:
-            if source == "current":
-                self._last_valid = candidate
-                return candidate.estimate, source, 0.0
-            return self._on_grid(candidate, s_ego), source, t - candidate.t_s
-        why = "missing" if candidate is None else (
-            "not finite" if not _finite(candidate) else f"{t - candidate.t_s:.2f} s old"
-        )
-        last = self._last_valid
-        if last is not None and t - last.t_s <= max_age + 1e-9:
-            self._recorder.event(t, "estimate_fallback", f"estimate {why}: last valid one used")
-            return self._on_grid(last, s_ego), "last_valid", t - last.t_s
+    def _recover_lane(
+        self,
+        t: float,
+        xf: np.ndarray,
+        s_ego: float,
+        plan: Plan,
+        estimate: FrictionEstimate,
+        obstacles: Sequence[PlannerObstacle],
+        mode: PlanningMode,
+    ) -> tuple[Plan, FrictionEstimate]:
+        """Re-plan with μ̂ relaxed towards the posterior mean if the plan cannot keep the lane."""
+        tolerance = self.lane_recovery.violation_tolerance_m
+        before = lane_violation_m(plan.states[1:, State.d], self.lane_bounds_m)
+        if before <= tolerance or relaxed_estimate(estimate, 1.0) is None:
+            return plan, estimate
+        best = (before, plan, estimate, 0.0)
+        for alpha in self.lane_recovery.steps:
+            relaxed = relaxed_estimate(estimate, alpha)
+            assert relaxed is not None
+            candidate = self._plan(xf, t, s_ego, relaxed, obstacles, mode)
+            violation = lane_violation_m(candidate.states[1:, State.d], self.lane_bounds_m)
+            if not candidate.fallback and violation < best[0]:
+                best = (violation, candidate, relaxed, alpha)
+            if not candidate.fallback and violation <= tolerance:
+                break
+        violation, plan, estimate, alpha = best
         self._recorder.event(
-            t, "estimate_fallback", f"estimate {why}: μ = {self.safety.mu_floor} assumed"
+            t, "lane_recovery",
+            f"plan left the lane by {before:.2f} m; μ̂ relaxed {alpha:.2f} of the way to the "
+            f"posterior mean, leaves it by {violation:.2f} m",
         )
-        floor = np.full(self.estimate_grid_m.size, self.safety.mu_floor)
-        local = fresh if fresh is not None else (last.estimate if last is not None else None)
-        return (
-            FrictionEstimate(
-                s_m=self.estimate_grid_m, mu_hat=floor,
-                local_available=bool(local and local.local_available),
-                local_mu=None if local is None else local.local_mu,
-            ),
-            "floor",
-            np.inf if last is None else t - last.t_s,
-        )
+        return plan, estimate
+
+    def _consider_probe(
+        self,
+        t: float,
+        xf: np.ndarray,
+        estimate: FrictionEstimate,
+        obstacles: Sequence[PlannerObstacle],
+    ) -> None:
+        if self._prober.active or self._minimal_risk:
+            return
+        s_ego = float(xf[State.s])
+        speed = float(np.hypot(xf[State.vx], xf[State.vy]))
+        near = any(o.s_m - s_ego < self.probing.clear_distance_m for o in obstacles)
+        kappa = self.world.curvature(s_ego + self.estimate_grid_m)
+        why = self._prober.reason_to_probe(t, speed, estimate, kappa, near)
+        if why is not None:
+            self._prober.start(t, speed)
+            self._recorder.event(t, "probe_start", why)
 
     def _estimate(
         self, t: float, s_ego: float, utilization: float, kinds: frozenset[str]
@@ -407,15 +318,6 @@ class ClosedLoop:
             self._enter_minimal_risk(t, "the friction source failed")
             return None
 
-    def _on_grid(self, anchored: _Anchored, s_ego: float) -> FrictionEstimate:
-        """An older estimate re-sampled on the grid ahead of ``s_ego`` (by absolute s)."""
-        grid_abs = s_ego + self.estimate_grid_m
-        mu_hat = np.interp(grid_abs, anchored.s_m + self.estimate_grid_m,
-                           np.asarray(anchored.estimate.mu_hat, dtype=float))
-        return dataclasses.replace(
-            anchored.estimate, s_m=self.estimate_grid_m, mu_hat=mu_hat, fused=None, data=None
-        )
-
     def _enter_minimal_risk(self, t: float, why: str) -> None:
         if not self._minimal_risk:
             self._minimal_risk = True
@@ -432,9 +334,10 @@ class ClosedLoop:
         curvature = float(self.world.curvature(np.array([float(xf[State.s])]))[0])
         if plan is not None and not (self._minimal_risk and not self._planner_usable):
             try:
-                return self.controller.command(
+                command = self.controller.command(
                     t, xf, float(x_plant[PlantState.STEER]), plan, curvature
                 ).clipped(self.params)
+                return self._probe_command(t, xf, command)
             except Exception as exc:
                 self._recorder.event(t, "controller_error", f"{type(exc).__name__}: {exc}")
                 self._enter_minimal_risk(t, "the controller failed")
@@ -444,6 +347,27 @@ class ClosedLoop:
             xf, curvature, self.params, min(max(mu, self.safety.mu_floor), 2.0),
             self.safety.minimal_risk_decel_fraction,
         )
+
+    def _probe_command(self, t: float, xf: np.ndarray, command: ActuatorCommand) -> ActuatorCommand:
+        """While probing: the controller's steering, the probe's braking (or harder)."""
+        prober = self._prober
+        if not prober.active:
+            return command
+        speed = float(np.hypot(xf[State.vx], xf[State.vy]))
+        why = prober.reason_to_stop(t, speed, self._local_available)
+        if why is not None:
+            lost = prober.stop(t, speed)
+            self._recorder.event(t, "probe_end", f"{why}; {lost:.2f} m/s lost")
+            return command
+        p = self.params
+        force = p.mass_kg * prober.decel_mps2(t)
+        share_front = p.cog_to_rear_axle_m / p.wheelbase_m
+        r = p.wheel_radius_m
+        return ActuatorCommand(
+            command.steer_rad,
+            min(command.torque_front_nm, -share_front * force * r),
+            min(command.torque_rear_nm, -(1.0 - share_front) * force * r),
+        ).clipped(p)
 
     def _mode(self, obstacles: Sequence[PlannerObstacle]) -> PlanningMode:
         if not obstacles:
@@ -493,10 +417,6 @@ class ClosedLoop:
             lane_d_min_m=self.lane_bounds_m[0],
             lane_d_max_m=self.lane_bounds_m[1],
         )
-
-
-def _finite(anchored: _Anchored) -> bool:
-    return bool(np.all(np.isfinite(np.asarray(anchored.estimate.mu_hat, dtype=float))))
 
 
 def _describe(fault: Fault) -> str:

@@ -1,0 +1,205 @@
+"""Beyond the paper: what the loop does when caution alone would drive the vehicle off the road.
+
+A conservative estimate (F-safe on a slippery road plans with the class minimum, e.g. μ̂ = 0.1)
+and an estimator that needs excitation (the slip-based one measures only above 0.5 utilisation)
+lock each other out: the planner never asks for enough force to excite the tires, the local
+estimate never arrives, and a curve that the true friction allows cannot be planned. Two
+supervisory behaviours break the lock; both are logged as events and as control modes.
+
+**Active friction probing** (:class:`Prober`). On a straight, with no obstacle near, when the
+local estimate is unavailable or stale, the posterior band ahead is wide (mean − μ̂ ≥
+``min_band``) and the road ahead at the current speed needs more friction than μ̂ grants, the loop
+brakes briefly and boundedly (deceleration ramped to ``max_decel_mps2`` over ``ramp_s``, at most
+``max_duration_s`` and ``max_speed_loss_mps``) so that the tires' utilisation passes the local
+estimator's threshold; it stops as soon as the local estimate is available. The speed lost is the
+probe's cost; it also helps, as the vehicle arrives slower.
+
+**Lane recovery** (:func:`relaxed_estimate`). When the friction-limited plan cannot keep the
+vehicle within its lane bounds (the plan's own prediction leaves them by more than
+``violation_tolerance_m``), the planner plans again with μ̂ relaxed towards the posterior mean,
+``μ̂ + α (mean − μ̂)`` for the smallest ``α`` of ``steps`` that keeps the lane (the last one if
+none does): the guarantee of the lower bound is given up only as far as needed to stay on the
+road, and only with a posterior (F, F-safe).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mufusion.configurations import FrictionEstimate
+from mufusion.vehicle.params import GRAVITY_MPS2
+
+
+@dataclass(frozen=True)
+class ProbingSettings:
+    """When and how hard the loop may probe the friction (see the module docstring)."""
+
+    enabled: bool = True
+    max_decel_mps2: float = 3.0
+    ramp_s: float = 0.3
+    max_duration_s: float = 0.6
+    max_speed_loss_mps: float = 2.0
+    stale_after_s: float = 1.0
+    min_band: float = 0.1
+    straight_curvature_1pm: float = 0.01
+    straight_ahead_m: float = 10.0
+    clear_distance_m: float = 60.0
+    cooldown_s: float = 2.0
+    min_speed_mps: float = 5.0
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if f.name == "enabled":
+                continue
+            if isinstance(value, bool) or not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"probing.{f.name} must be a finite number > 0, got {value!r}")
+        if self.max_decel_mps2 > 8.0:
+            raise ValueError(
+                f"probing.max_decel_mps2 must be <= 8 m/s² (a probe, not an emergency stop), "
+                f"got {self.max_decel_mps2}"
+            )
+
+
+@dataclass(frozen=True)
+class LaneRecoverySettings:
+    """When the loop may relax μ̂ towards the posterior mean (see the module docstring)."""
+
+    enabled: bool = True
+    violation_tolerance_m: float = 0.05
+    steps: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0)
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.violation_tolerance_m) and self.violation_tolerance_m >= 0.0):
+            raise ValueError(
+                "lane_recovery.violation_tolerance_m must be finite and >= 0 m, "
+                f"got {self.violation_tolerance_m!r}"
+            )
+        steps = tuple(self.steps)
+        if not steps or any(not 0.0 < a <= 1.0 for a in steps) or list(steps) != sorted(steps):
+            raise ValueError(
+                f"lane_recovery.steps must be increasing fractions in (0, 1], got {self.steps!r}"
+            )
+
+
+def lane_violation_m(d_m: np.ndarray, lane_bounds_m: tuple[float, float]) -> float:
+    """How far a planned path's reference point leaves the lane bounds [m] (0 inside)."""
+    d = np.asarray(d_m, dtype=float)
+    lo, hi = lane_bounds_m
+    return float(max(0.0, np.max(lo - d, initial=0.0), np.max(d - hi, initial=0.0)))
+
+
+def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
+    """μ̂ moved the fraction ``alpha`` towards the posterior mean (never lowered); None without
+    a posterior or when the mean adds nothing.
+
+    Examples
+    --------
+    >>> from mufusion.fusion import FusedEstimate
+    >>> s = np.array([0.0, 10.0])
+    >>> post = FusedEstimate(s, np.array([0.5, 0.5]), np.ones(2), np.zeros(2), np.zeros(2))
+    >>> est = FrictionEstimate(s, np.array([0.1, 0.3]), False, None, fused=post)
+    >>> relaxed_estimate(est, 0.5).mu_hat.tolist()
+    [0.3, 0.4]
+    """
+    if estimate.fused is None:
+        return None
+    mu_hat = np.asarray(estimate.mu_hat, dtype=float)
+    gain = np.maximum(np.asarray(estimate.fused.mean, dtype=float) - mu_hat, 0.0)
+    if not np.any(gain > 1e-9):
+        return None
+    return dataclasses.replace(estimate, mu_hat=mu_hat + alpha * gain)
+
+
+class Prober:
+    """The state of active friction probing: when it may start, its progress, its end.
+
+    Parameters
+    ----------
+    settings
+        Bounds and trigger thresholds.
+    utilization_factor
+        The planner's λ: μ̂ grants ``λ μ̂ g`` of acceleration.
+    """
+
+    def __init__(self, settings: ProbingSettings, utilization_factor: float) -> None:
+        self.settings = settings
+        self.utilization_factor = utilization_factor
+        self.active = False
+        self.probes = 0
+        self.speed_lost_mps = 0.0
+        self._start_t = -math.inf
+        self._start_speed = 0.0
+        self._end_t = -math.inf
+        self._last_local_t = -math.inf
+
+    def reason_to_probe(
+        self,
+        t_s: float,
+        speed_mps: float,
+        estimate: FrictionEstimate,
+        curvature_ahead_1pm: np.ndarray,
+        obstacle_near: bool,
+    ) -> str | None:
+        """Why a probe should start now (a text for the log), or None.
+
+        ``curvature_ahead_1pm`` is the road's curvature at the estimate's grid points.
+        """
+        cfg = self.settings
+        if estimate.local_available:
+            self._last_local_t = t_s
+        if not cfg.enabled or self.active or t_s - self._end_t < cfg.cooldown_s:
+            return None
+        if estimate.local_available or t_s - self._last_local_t < cfg.stale_after_s:
+            return None
+        if estimate.fused is None or speed_mps < cfg.min_speed_mps or obstacle_near:
+            return None
+        grid = np.asarray(estimate.s_m, dtype=float)
+        kappa = np.abs(np.asarray(curvature_ahead_1pm, dtype=float))
+        if np.any(kappa[grid <= cfg.straight_ahead_m] > cfg.straight_curvature_1pm):
+            return None
+        mu_hat = np.asarray(estimate.mu_hat, dtype=float)
+        band = float(np.max(np.asarray(estimate.fused.mean, dtype=float) - mu_hat))
+        if band < cfg.min_band:
+            return None
+        needed = speed_mps**2 * kappa / GRAVITY_MPS2
+        granted = self.utilization_factor * mu_hat
+        short = needed - granted
+        if not np.any(short > 0.0):
+            return None
+        k = int(np.argmax(short))
+        return (
+            f"local estimate stale, band {band:.2f} wide; at {speed_mps:.1f} m/s the road "
+            f"{grid[k]:.0f} m ahead needs μ {needed[k]:.2f}, μ̂ grants {granted[k]:.2f}"
+        )
+
+    def start(self, t_s: float, speed_mps: float) -> None:
+        self.active, self._start_t, self._start_speed = True, t_s, speed_mps
+        self.probes += 1
+
+    def decel_mps2(self, t_s: float) -> float:
+        """The probe's deceleration request at ``t_s`` (ramped to the cap)."""
+        cfg = self.settings
+        return cfg.max_decel_mps2 * min(1.0, (t_s - self._start_t) / cfg.ramp_s)
+
+    def reason_to_stop(self, t_s: float, speed_mps: float, local_available: bool) -> str | None:
+        """Why the running probe ends now (for the log), or None."""
+        cfg = self.settings
+        if local_available:
+            return "local estimate available"
+        if t_s - self._start_t >= cfg.max_duration_s - 1e-9:
+            return "longest probe reached"
+        if self._start_speed - speed_mps >= cfg.max_speed_loss_mps:
+            return "largest speed loss reached"
+        return None
+
+    def stop(self, t_s: float, speed_mps: float) -> float:
+        """End the probe; returns the speed it cost [m/s]."""
+        self.active, self._end_t = False, t_s
+        lost = max(self._start_speed - speed_mps, 0.0)
+        self.speed_lost_mps += lost
+        return lost
