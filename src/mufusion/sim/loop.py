@@ -263,9 +263,10 @@ class ClosedLoop:
         """Re-plan with μ̂ relaxed towards the posterior mean if the plan cannot keep the lane."""
         tolerance = self.lane_recovery.violation_tolerance_m
         before = lane_violation_m(plan.states[1:, State.d], self.lane_bounds_m)
-        if before <= tolerance or relaxed_estimate(estimate, 1.0) is None:
+        # No friction-limited plan at all (the solve failed) counts as not keeping the lane.
+        if (before <= tolerance and not plan.fallback) or relaxed_estimate(estimate, 1.0) is None:
             return plan, estimate
-        best = (before, plan, estimate, 0.0)
+        best = (np.inf if plan.fallback else before, plan, estimate, 0.0)
         for alpha in self.lane_recovery.steps:
             relaxed = relaxed_estimate(estimate, alpha)
             assert relaxed is not None
@@ -276,10 +277,15 @@ class ClosedLoop:
             if not candidate.fallback and violation <= tolerance:
                 break
         violation, plan, estimate, alpha = best
+        problem = "no friction-limited plan" if not np.isfinite(best[0]) and alpha == 0.0 else (
+            "the friction-limited plan failed" if alpha > 0.0 and before <= tolerance
+            else f"the plan left the lane by {before:.2f} m"
+        )
         self._recorder.event(
             t, "lane_recovery",
-            f"plan left the lane by {before:.2f} m; μ̂ relaxed {alpha:.2f} of the way to the "
-            f"posterior mean, leaves it by {violation:.2f} m",
+            f"{problem}; μ̂ relaxed {alpha:.2f} of the way to the posterior mean, the plan "
+            f"leaves the lane by {violation:.2f} m" if alpha > 0.0 else f"{problem}; relaxing "
+            "μ̂ towards the posterior mean did not help",
         )
         return plan, estimate
 
