@@ -1,13 +1,15 @@
 """Closed-loop speed: real-time factor of the paper scenarios and where the time goes.
 
-Run: ``python benchmarks/closed_loop.py [--repeat N] [--configuration F]``. For each paper
-scenario (``turn``: 12 s simulated, ``popup``: 6 s) one untimed run compiles/loads the solver,
-then ``N`` timed runs give the real-time factor (simulated s / wall s of ``run_scenario``, median
-and best) and the same against the process's CPU time, which other jobs on a shared machine
-disturb far less than the wall clock. One more run with every component's methods wrapped in
-CPU-time accumulators (``time.process_time``) gives the breakdown by stage (exclusive time: a world
-call made from inside the planner counts for the world, not twice). The wrappers add about a
-microsecond per call, so that run's own factor is printed too. Numbers go to docs/performance.md,
+Run: ``python benchmarks/closed_loop.py [--repeat N] [--configuration F] [--blas-threads K]``.
+For each paper scenario (``turn``: 12 s simulated, ``popup``: 6 s) one untimed run
+compiles/loads the solver, then ``N`` timed runs give the real-time factor (simulated s / wall s
+of ``run_scenario``, median and best) and the same against the process's CPU time, which other
+jobs on a shared machine disturb far less than the wall clock. One more run with every
+component's methods wrapped in CPU-time accumulators (``time.process_time``) gives the breakdown
+by stage (exclusive time: a world call made from inside the planner counts for the world, not
+twice). The wrappers add about a microsecond per call, so that run's own factor is printed too.
+``--blas-threads 1`` limits the BLAS thread pools to one thread (the fusion's small matrix
+products gain nothing from threads on a busy 2-core machine). Numbers go to docs/performance.md,
 section "## Closed loop".
 """
 
@@ -22,6 +24,8 @@ from collections import defaultdict
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
+
+from threadpoolctl import threadpool_limits
 
 from mufusion.fusion.configurations import FrictionConfiguration
 
@@ -144,11 +148,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3, help="timed runs per scenario (≥ 1)")
     parser.add_argument("--configuration", default="F", help="friction configuration")
+    parser.add_argument("--blas-threads", type=int, default=None,
+                        help="limit BLAS/OpenMP thread pools to this many threads (≥ 1)")
     args = parser.parse_args()
     if args.repeat < 1:
         raise ValueError(f"--repeat must be >= 1, got {args.repeat}")
+    if args.blas_threads is not None and args.blas_threads < 1:
+        raise ValueError(f"--blas-threads must be >= 1, got {args.blas_threads}")
     for name in SCENARIOS:
-        result = measure(name, args.configuration, args.repeat)
+        with threadpool_limits(limits=args.blas_threads):
+            result = measure(name, args.configuration, args.repeat)
+        result["blas_threads"] = args.blas_threads
         cpu_ms = 1e3 * result["instrumented_cpu_s"]
         print(f"{name} ({args.configuration}, {result['simulated_s']:.1f} s simulated): "
               f"real-time factor {result['realtime_factor_median']:.1f}x median, "
