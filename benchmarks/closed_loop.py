@@ -27,13 +27,13 @@ from typing import Any
 
 from threadpoolctl import threadpool_limits
 
-from mufusion.fusion.configurations import FrictionConfiguration
-
+from mufusion.configurations import FrictionConfiguration
 from mufusion.planner import TrackingController, TractionAdaptivePlanner
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
 from mufusion.sim.log import RunLog
 from mufusion.sim.loop import ClosedLoop
+from mufusion.sim.recorder import Recorder
 from mufusion.sim.world import World
 from mufusion.vehicle.plant import Plant
 
@@ -94,8 +94,8 @@ def instrumented(clock: StageClock) -> Iterator[None]:
         if "step" in vars(cls):
             targets.append((cls, "step", "estimation+fusion"))
     targets += [(World, name, "geometry/world") for name in _public_methods(World)]
-    targets += [(RunLog, name, "logging") for name in _public_methods(RunLog)
-                if name.startswith("append")]
+    targets += [(Recorder, name, "logging") for name in ("tick", "planning_step", "event")]
+    targets += [(RunLog, "frame", "logging")]
     saved = [(cls, name, vars(cls)[name]) for cls, name, _ in targets]
     try:
         for cls, name, stage in targets:
