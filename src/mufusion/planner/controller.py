@@ -1,9 +1,11 @@
 """Tracking controller: turns the current plan into actuator commands at ≥ 50 Hz.
 
 Steering = inverse Magic-Formula of the planned front lateral force at the planned normal load and
-friction estimate, plus the small-angle slip kinematics ``δ = α_f + (v_y + l_f ψ̇)/v_x``, plus
-feedback on lateral and heading error. Wheel torques = planned longitudinal forces × wheel radius,
-plus speed feedback. The command is rate-limited and clipped to the actuators' ranges.
+friction estimate (with the tire the planner assumes: the vehicle's own, or with
+``PlannerConfig.stiffness = "from_mu_hat"`` the set of its ``stiffness_table`` at μ̂), plus
+the small-angle slip kinematics ``δ = α_f + (v_y + l_f ψ̇)/v_x``, plus feedback on lateral and
+heading error. Wheel torques = planned longitudinal forces × wheel radius, plus speed feedback.
+The command is rate-limited and clipped to the actuators' ranges.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from mufusion.planner.planner import Plan
 from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.params import TireParams, VehicleParams
 from mufusion.vehicle.planner_model import MIN_SPEED_FOR_SLIP_MPS, Input, State
+from mufusion.vehicle.surface_tires import tire_for_surface
 
 
 @dataclass(frozen=True)
@@ -72,6 +75,14 @@ class TrackingController:
             raise ValueError(f"rate_hz must be >= 50 Hz, got {self.gains.rate_hz}")
         self._last_steer_cmd_rad: float | None = None
 
+    def _assumed_tire(self, mu_hat: float) -> TireParams:
+        """The front tire the feed-forward inverts: the vehicle's, or the table's set at μ̂."""
+        table = None if self.config is None else self.config.stiffness_table
+        if table is None or not (mu_hat > 0.0 and np.isfinite(mu_hat)):
+            return self.params.tire
+        # front_slip_angle_for_force_rad floors μ̂ at 0.05; the tire follows the same value.
+        return tire_for_surface(max(mu_hat, 0.05), self.params.tire, table)
+
     def reset(self) -> None:
         """Forget the last steering command (the next one is limited against the measured angle)."""
         self._last_steer_cmd_rad = None
@@ -105,9 +116,10 @@ class TrackingController:
         k_p = int(tau_p)
         frac_p = tau_p - k_p
         x_p = (1.0 - frac_p) * plan.states[k_p] + frac_p * plan.states[k_p + 1]
+        mu_p = float(plan.mu_hat[k_p])
         alpha_f = front_slip_angle_for_force_rad(
-            float(plan.inputs[k_p, Input.fyf]), float(plan.normal_load_front_n[k_p]),
-            float(plan.mu_hat[k_p]), par.tire,
+            float(plan.inputs[k_p, Input.fyf]), float(plan.normal_load_front_n[k_p]), mu_p,
+            self._assumed_tire(mu_p),
         )
         vx_ref = max(x_p[State.vx], MIN_SPEED_FOR_SLIP_MPS)
         # α_f = δ − (v_y + l_f ψ̇)/v_x, solved for δ.

@@ -91,7 +91,9 @@ def minimal_risk_rollout(
         kappa = float(np.asarray(curvature_of_s(s), dtype=float).reshape(-1)[0])
         mu = float(np.asarray(mu_hat_of_s(s), dtype=float).reshape(-1)[0])
         fzf, fzr = (float(f) for f in normal_loads_n(ax, params))
-        c_r = rear_cornering_stiffness_n_per_rad(params, fzr, lam)
+        c_r = float(rear_cornering_stiffness_n_per_rad(
+            params, fzr, lam, mu_hat=mu, table=config.stiffness_table
+        ))
         limit_f, limit_r = lam * mu * fzf, lam * mu * fzr
         # Brake at the declared deceleration, but never past standstill within this step.
         decel_target = config.safety.minimal_risk_decel_fraction * mu * GRAVITY_MPS2

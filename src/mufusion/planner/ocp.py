@@ -27,8 +27,11 @@ from mufusion.vehicle.planner_model import (
     rear_cornering_stiffness_n_per_rad,
     rear_lateral_force_n,
 )
+from mufusion.vehicle.surface_tires import SurfaceTireTable
 
 PlannerMode = Literal["cruise", "evade", "emergency", "minimal_risk"]
+StiffnessModel = Literal["fixed", "from_mu_hat"]
+STIFFNESS_MODELS: tuple[str, ...] = ("fixed", "from_mu_hat")
 PLANNER_MODES: tuple[str, ...] = ("cruise", "evade", "emergency", "minimal_risk")
 
 # Upper bound on v_x at stages 1..N [m/s]: inactive in practice, it keeps the box finite.
@@ -121,7 +124,14 @@ class PlannerObstacle:
 
 @dataclass(frozen=True)
 class PlannerConfig:
-    """Planner configuration; checked on construction."""
+    """Planner configuration; checked on construction.
+
+    ``stiffness`` says which cornering stiffness the planner's linear rear tire and the
+    controller's inverse Magic Formula assume: ``"fixed"`` (default), the vehicle's tire on every
+    surface; ``"from_mu_hat"``, the set of ``stiffness_table`` at the estimate μ̂ of each stage
+    (the authors' ``get_cornering_stiffness``: a model that knows the tire's surface dependence
+    but not the surface, so a wrong μ̂ gives a wrong stiffness too).
+    """
 
     horizon_steps: int = 40
     dt_s: float = 0.1
@@ -141,8 +151,21 @@ class PlannerConfig:
     # deceleration, and the fallback count after which the caller switches to "minimal_risk".
     safety: SafetySettings = field(default_factory=SafetySettings)
     plausibility: PlausibilityLimits = field(default_factory=PlausibilityLimits)
+    stiffness: StiffnessModel = "fixed"
+    stiffness_table: SurfaceTireTable | None = None
 
     def __post_init__(self) -> None:
+        if self.stiffness not in STIFFNESS_MODELS:
+            raise ValueError(
+                f"stiffness must be one of {list(STIFFNESS_MODELS)}, got {self.stiffness!r}"
+            )
+        if self.stiffness == "from_mu_hat" and not isinstance(
+            self.stiffness_table, SurfaceTireTable
+        ):
+            raise ValueError("stiffness='from_mu_hat' needs a SurfaceTireTable as stiffness_table")
+        if self.stiffness == "fixed" and self.stiffness_table is not None:
+            raise ValueError("stiffness_table is only used with stiffness='from_mu_hat'; "
+                             "with 'fixed' leave it None")
         if not 5 <= self.horizon_steps <= 200:
             raise ValueError(f"horizon_steps must be in [5, 200], got {self.horizon_steps}")
         if not 0.0 < self.dt_s <= 0.5:
@@ -199,8 +222,12 @@ def stage_parameters(
     mu_hat_of_s,
     params: VehicleParams,
     utilization_factor: float,
+    stiffness_table: SurfaceTireTable | None = None,
 ) -> dict[str, np.ndarray]:
     """Per-stage parameters from the initial guess (predicted ``s_k`` and ``a_x,k``).
+
+    ``stiffness_table``: ``None`` keeps the rear stiffness of the vehicle's tire; a table makes
+    it follow each stage's μ̂ (``PlannerConfig.stiffness = "from_mu_hat"``).
 
     Returns arrays of length N: ``mu_hat``, ``fzf``, ``fzr``, ``radius_front``, ``radius_rear``,
     ``rear_stiffness``, ``curvature`` and the stacked ``p`` of shape ``(N, N_PARAMS)``.
@@ -212,7 +239,9 @@ def stage_parameters(
     fzr = np.maximum(fzr, 0.05 * params.mass_kg * 9.81)
     mu = np.clip(np.asarray(mu_hat_of_s(s_k), dtype=float), MU_MIN, MU_MAX)
     kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
-    c_r = rear_cornering_stiffness_n_per_rad(params, fzr, utilization_factor)
+    c_r = rear_cornering_stiffness_n_per_rad(
+        params, fzr, utilization_factor, mu_hat=mu, table=stiffness_table
+    )
     radius_front = utilization_factor * mu * fzf
     radius_rear = utilization_factor * mu * fzr
     p = np.zeros((s_k.size, N_PARAMS))

@@ -254,7 +254,7 @@ class TractionAdaptivePlanner:
         for _ in range(iterations):
             guess_x, guess_u = xs, us
             stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
-                                     cfg.utilization_factor)
+                                     cfg.utilization_factor, cfg.stiffness_table)
             d_lo, d_hi = lateral_corridor(
                 guess_x, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m,
                 curvature_of_s(guess_x[1:, State.s]),
@@ -333,6 +333,7 @@ class TractionAdaptivePlanner:
                 xs, us = candidate_rollouts(
                     x0, lateral, speeds, curvature_of_s, mu_hat_of_s, par,
                     cfg.utilization_factor, cfg.horizon_steps, cfg.dt_s, sc,
+                    stiffness_table=cfg.stiffness_table,
                 )
             both = np.concatenate([guess_x[:, :, None], xs], axis=2)
             with np.errstate(all="ignore"):

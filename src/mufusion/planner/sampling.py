@@ -24,6 +24,7 @@ from mufusion.vehicle.planner_model import (
     normal_loads_n,
     rear_cornering_stiffness_n_per_rad,
 )
+from mufusion.vehicle.surface_tires import SurfaceTireTable
 
 # Cost of one metre of obstacle/road violation relative to tracking (per stage) [1/m].
 VIOLATION_WEIGHT = 1e4
@@ -124,8 +125,12 @@ def candidate_rollouts(
     horizon_steps: int,
     dt_s: float,
     config: SamplingConfig,
+    stiffness_table: SurfaceTireTable | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Roll out every (lateral target, speed target) pair.
+
+    ``stiffness_table``: the rear stiffness follows μ̂ through it, as in the OCP (``None``: the
+    vehicle's fixed tire).
 
     Returns
     -------
@@ -145,7 +150,9 @@ def candidate_rollouts(
         kappa = np.asarray(curvature_of_s(x[State.s]), dtype=float) * np.ones(m_count)
         mu = np.asarray(mu_hat_of_s(x[State.s]), dtype=float) * np.ones(m_count)
         fzf, fzr = normal_loads_n(ax, params)
-        c_r = rear_cornering_stiffness_n_per_rad(params, fzr, utilization_factor)
+        c_r = rear_cornering_stiffness_n_per_rad(
+            params, fzr, utilization_factor, mu_hat=mu, table=stiffness_table
+        )
         fyf = steering_force_n(x, d_t, kappa, v, params, config)
         f_long = m * config.speed_gain_1_per_s * (v_t - x[State.vx])
         fxf = np.where(f_long < 0.0, share_front * f_long, 0.0)

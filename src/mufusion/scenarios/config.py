@@ -21,6 +21,11 @@ from mufusion.sim.faults import Fault
 from mufusion.sim.loop import LoopRates
 from mufusion.sim.supervision import LaneRecoverySettings, ProbingSettings
 from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.surface_tires import (
+    AUTHORS_TIRES,
+    AUTHORS_TIRES_INTERPOLATED,
+    SurfaceTireTable,
+)
 
 VehicleName = Literal["truck", "car"]
 """The vehicle presets (:data:`mufusion.vehicle.params.PRESETS`; a test keeps them in step)."""
@@ -128,11 +133,31 @@ class PlannerSettings(_Strict):
     backend: Literal["acados", "casadi"] = "acados"
     use_sampling: bool = True
     rate_hz: Annotated[float, Field(ge=1.0, le=50.0)] = 10.0
+    stiffness: Literal["fixed", "from_mu_hat"] = "fixed"
+    """Cornering stiffness of the planner's rear tire and the controller's inverse tire model:
+    ``fixed`` (the vehicle's tire on every surface) or ``from_mu_hat`` (the plant's tire table,
+    ``sim.tires``, at the estimate μ̂, as the authors' planner and controller computed it)."""
+
+
+SimTires = Literal["default", "authors", "authors_interpolated"]
+_SURFACE_TIRES: dict[str, SurfaceTireTable | None] = {
+    "default": None,
+    "authors": AUTHORS_TIRES,
+    "authors_interpolated": AUTHORS_TIRES_INTERPOLATED,
+}
 
 
 class SimSettings(_Strict):
     plant_rate_hz: Annotated[float, Field(ge=200.0, le=2000.0)] = 200.0
     controller_rate_hz: Annotated[float, Field(ge=50.0, le=500.0)] = 50.0
+    tires: SimTires = "default"
+    """The plant's tires: ``default`` (stiffness independent of μ, only the peak scales) or the
+    authors' surface-dependent Magic Formula sets per μ under each axle, by interval
+    (``authors``) or interpolated (``authors_interpolated``); docs/estimators.md."""
+
+    def surface_tires(self) -> SurfaceTireTable | None:
+        """The plant's tire table (``None`` for the default tire)."""
+        return _SURFACE_TIRES[self.tires]
 
 
 class _Scenario(_Strict):
@@ -173,6 +198,12 @@ class _Scenario(_Strict):
             raise ValueError(
                 f"duration_s must exceed comparison_time_s = {self.comparison_time_s} s "
                 f"(the instant the runs are compared at), got {self.duration_s}"
+            )
+        if self.planner.stiffness == "from_mu_hat" and self.sim.tires == "default":
+            raise ValueError(
+                "planner.stiffness = 'from_mu_hat' follows μ̂ through the plant's tire table, but "
+                "sim.tires = 'default' has a stiffness independent of μ; set sim.tires to "
+                "'authors' or 'authors_interpolated' (or planner.stiffness = 'fixed')"
             )
         try:
             self.rates()

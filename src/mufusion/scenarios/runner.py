@@ -59,6 +59,10 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         lane_d_min_m=lo,
         lane_d_max_m=hi,
         safety=cfg.safety,
+        stiffness=cfg.planner.stiffness,
+        stiffness_table=(
+            cfg.sim.surface_tires() if cfg.planner.stiffness == "from_mu_hat" else None
+        ),
     )
 
 
@@ -111,7 +115,7 @@ def run_scenario(
     )
     x0_x, x0_y, x0_psi = (float(v) for v in road.to_cartesian(s0, 0.0, 0.0))
     plant = Plant(params, initial_state(params, x0_x, x0_y, x0_psi, cfg.initial_speed_mps),
-                  dt_s=1.0 / rates.plant_hz)
+                  dt_s=1.0 / rates.plant_hz, surface_tires=cfg.sim.surface_tires())
     loop = ClosedLoop(
         world=world,
         params=params,

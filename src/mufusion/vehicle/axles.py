@@ -13,8 +13,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
+from mufusion.vehicle.params import GRAVITY_MPS2, TireParams, VehicleParams
 from mufusion.vehicle.plant_state import PlantStateVector, state_vector
+from mufusion.vehicle.surface_tires import SurfaceTireTable, tire_for_surface
 from mufusion.vehicle.tires import tire_forces_scalar
 
 # Slip quantities divide by at least this speed [m/s] (the issue's "regularise below ~1 m/s").
@@ -70,11 +71,15 @@ def axle_outputs(
     mu_front: float,
     mu_rear: float,
     p: VehicleParams,
+    tire_front: TireParams | None = None,
+    tire_rear: TireParams | None = None,
 ) -> tuple[AxleOutput, AxleOutput]:
     """Front and rear :class:`AxleOutput` at chassis state ``x`` and the given wheel spins.
 
     The wheel spins are arguments (not read from ``x``) because the plant's integrator evaluates
-    the forces with predicted wheel speeds. Plain floats, no validation: the inner loop's call.
+    the forces with predicted wheel speeds. ``tire_front`` / ``tire_rear``: the tire on each
+    axle's surface (:func:`~mufusion.vehicle.surface_tires.tire_for_surface`); ``None`` is the
+    vehicle's own ``p.tire``. Plain floats, no validation: the inner loop's call.
     """
     u_f, w_f, u_r, w_r = wheel_speeds(x, p)
     radius = p.wheel_radius_m
@@ -85,8 +90,12 @@ def axle_outputs(
     alpha_f = -math.atan(w_f / den_f)
     alpha_r = -math.atan(w_r / den_r)
     # Forces per unit load: slip does not depend on F_z and the tire scales linearly with it.
-    gxf, gyf, used_f, asked_f = tire_forces_scalar(kappa_f, alpha_f, 1.0, mu_front, p.tire)
-    gxr, gyr, used_r, asked_r = tire_forces_scalar(kappa_r, alpha_r, 1.0, mu_rear, p.tire)
+    gxf, gyf, used_f, asked_f = tire_forces_scalar(
+        kappa_f, alpha_f, 1.0, mu_front, p.tire if tire_front is None else tire_front
+    )
+    gxr, gyr, used_r, asked_r = tire_forces_scalar(
+        kappa_r, alpha_r, 1.0, mu_rear, p.tire if tire_rear is None else tire_rear
+    )
     # Quasi-static pitch load transfer: m a = F_zf g_f + F_zr g_r with
     # F_zf = m (g l_r − a h)/L, F_zr = m (g l_f + a h)/L, solved for a in closed form.
     lf, lr, h = p.cog_to_front_axle_m, p.cog_to_rear_axle_m, p.cog_height_m
@@ -124,7 +133,11 @@ def axle_outputs(
 
 
 def axle_forces(
-    x: np.ndarray, mu_front: float, mu_rear: float, params: VehicleParams
+    x: np.ndarray,
+    mu_front: float,
+    mu_rear: float,
+    params: VehicleParams,
+    surface_tires: SurfaceTireTable | None = None,
 ) -> tuple[AxleOutput, AxleOutput]:
     """Tire forces, slips and utilisations of both axles at plant state ``x``.
 
@@ -137,6 +150,9 @@ def axle_forces(
         True road friction under each axle [-], > 0.
     params
         Vehicle parameters.
+    surface_tires
+        ``None``: the vehicle's tire on every surface (stiffness independent of μ). A table:
+        each axle's tire follows the μ under it (:func:`tire_for_surface`).
 
     Returns
     -------
@@ -158,4 +174,8 @@ def axle_forces(
     """
     check_mu(mu_front, mu_rear)
     s = state_vector(x)
-    return axle_outputs(s, s.omega_front_radps, s.omega_rear_radps, mu_front, mu_rear, params)
+    return axle_outputs(
+        s, s.omega_front_radps, s.omega_rear_radps, mu_front, mu_rear, params,
+        tire_for_surface(mu_front, params.tire, surface_tires),
+        tire_for_surface(mu_rear, params.tire, surface_tires),
+    )

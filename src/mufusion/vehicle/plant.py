@@ -4,7 +4,9 @@ A dynamic bicycle in Cartesian coordinates with
 
 * wheel-speed dynamics per axle (``I_w ω̇ = T_drive − T_brake − R F_x``),
 * the combined-slip Magic Formula tire of :mod:`mufusion.vehicle.tires`, whose peak is μ F_z with
-  the true μ under each axle and whose stiffness does not depend on μ,
+  the true μ under each axle and whose stiffness does not depend on μ (or, with a
+  :class:`~mufusion.vehicle.surface_tires.SurfaceTireTable`, whose coefficients follow the surface
+  under each axle, as in the authors' simulator),
 * quasi-static longitudinal load transfer from the current acceleration (solved in closed form,
   see :mod:`mufusion.vehicle.axles`),
 * a first-order, rate-limited steering servo and first-order wheel-torque lags.
@@ -35,7 +37,7 @@ from mufusion.vehicle.axles import (
     check_mu,
     wheel_speeds,
 )
-from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.params import TireParams, VehicleParams
 from mufusion.vehicle.plant_state import (
     N_PLANT_STATES,
     PlantState,
@@ -44,6 +46,7 @@ from mufusion.vehicle.plant_state import (
     initial_state,
     state_vector,
 )
+from mufusion.vehicle.surface_tires import SurfaceTireTable, tire_for_surface
 from mufusion.vehicle.tires import tire_forces_scalar
 
 __all__ = [
@@ -166,6 +169,7 @@ def plant_derivative(
     mu_front: float,
     mu_rear: float,
     params: VehicleParams,
+    surface_tires: SurfaceTireTable | None = None,
 ) -> np.ndarray:
     """Time derivative of the plant state (pure function).
 
@@ -180,6 +184,9 @@ def plant_derivative(
         True road friction under the front and the rear axle [-], > 0.
     params
         Vehicle parameters.
+    surface_tires
+        ``None``: the vehicle's tire on every surface. A table: each axle's tire follows the μ
+        under it (:func:`~mufusion.vehicle.surface_tires.tire_for_surface`).
 
     Returns
     -------
@@ -204,7 +211,9 @@ def plant_derivative(
     state = state_vector(x)
     cmd = _command_tuple(command, params)
     front, rear = axle_outputs(
-        state, state.omega_front_radps, state.omega_rear_radps, mu_front, mu_rear, params
+        state, state.omega_front_radps, state.omega_rear_radps, mu_front, mu_rear, params,
+        tire_for_surface(mu_front, params.tire, surface_tires),
+        tire_for_surface(mu_rear, params.tire, surface_tires),
     )
     rates = _chassis_rates(
         state, front, rear, cmd, params,
@@ -241,6 +250,11 @@ class Plant:
         Initial state, shape ``(11,)`` (see :func:`initial_state`).
     dt_s
         Step [s], at most 1/200 s.
+    surface_tires
+        ``None`` (default): the vehicle's tire on every surface, its stiffness independent of μ.
+        A table (e.g. :data:`~mufusion.vehicle.surface_tires.AUTHORS_TIRES`): each axle's tire
+        follows the true μ under that axle at every step, wherever that axle's forces are
+        evaluated (the RK4 stages, the implicit wheel step's tangent stiffness, the output).
 
     Raises
     ------
@@ -257,11 +271,20 @@ class Plant:
     """
 
     def __init__(
-        self, params: VehicleParams, x0: np.ndarray, dt_s: float = DEFAULT_DT_S
+        self,
+        params: VehicleParams,
+        x0: np.ndarray,
+        dt_s: float = DEFAULT_DT_S,
+        surface_tires: SurfaceTireTable | None = None,
     ) -> None:
         if not (0.0 < dt_s <= DEFAULT_DT_S + 1e-12):
             raise ValueError(f"dt_s must be in (0, {DEFAULT_DT_S}] s, got {dt_s!r}")
+        if surface_tires is not None and not isinstance(surface_tires, SurfaceTireTable):
+            raise ValueError(
+                f"surface_tires must be a SurfaceTireTable or None, got {type(surface_tires)!r}"
+            )
         self.params = params
+        self.surface_tires = surface_tires
         self.dt_s = float(dt_s)
         self._x = state_vector(x0)
         self.time_s = 0.0
@@ -304,6 +327,9 @@ class Plant:
         cmd = _command_tuple(command, p)
         x0 = self._x
         u_f0, _, u_r0, _ = wheel_speeds(x0, p)
+        # The surface under each axle is held over the step (μ is too).
+        tires = (tire_for_surface(mu_front, p.tire, self.surface_tires),
+                 tire_for_surface(mu_rear, p.tire, self.surface_tires))
 
         def stage(x: PlantStateVector) -> PlantStateVector:
             u_f, _, u_r, _ = wheel_speeds(x, p)
@@ -311,7 +337,7 @@ class Plant:
                 x,
                 _follow_axle(x0.omega_front_radps, u_f, u_f0, radius),
                 _follow_axle(x0.omega_rear_radps, u_r, u_r0, radius),
-                mu_front, mu_rear, p,
+                mu_front, mu_rear, p, *tires,
             )
             return _chassis_rates(x, front, rear, cmd, p)
 
@@ -324,11 +350,13 @@ class Plant:
             a + dt / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
             for a, b1, b2, b3, b4 in zip(x0, k1, k2, k3, k4, strict=True)
         )
-        omega_front, omega_rear = self._implicit_wheels(x0, chassis, u_f0, u_r0, mu_front, mu_rear)
+        omega_front, omega_rear = self._implicit_wheels(
+            x0, chassis, u_f0, u_r0, mu_front, mu_rear, tires
+        )
         x1 = chassis._replace(omega_front_radps=omega_front, omega_rear_radps=omega_rear)
         self._x = x1
         self.time_s += dt
-        return self._output(x1, mu_front, mu_rear)
+        return self._output(x1, mu_front, mu_rear, tires)
 
     def _implicit_wheels(
         self,
@@ -338,6 +366,7 @@ class Plant:
         u_r0: float,
         mu_f: float,
         mu_r: float,
+        tires: tuple[TireParams, TireParams],
     ) -> tuple[float, float]:
         """Linearly implicit Euler step of both wheel spins at the new chassis state ``x1``."""
         p, dt = self.params, self.dt_s
@@ -345,16 +374,16 @@ class Plant:
         u_f1, _, u_r1, _ = wheel_speeds(x1, p)
         predicted_f = _follow_axle(x0.omega_front_radps, u_f1, u_f0, radius)
         predicted_r = _follow_axle(x0.omega_rear_radps, u_r1, u_r0, radius)
-        front, rear = axle_outputs(x1, predicted_f, predicted_r, mu_f, mu_r, p)
+        front, rear = axle_outputs(x1, predicted_f, predicted_r, mu_f, mu_r, p, *tires)
         new = []
-        for omega0, predicted, torque, axle in (
-            (x0.omega_front_radps, predicted_f, x1.torque_front_nm, front),
-            (x0.omega_rear_radps, predicted_r, x1.torque_rear_nm, rear),
+        for omega0, predicted, torque, axle, tire in (
+            (x0.omega_front_radps, predicted_f, x1.torque_front_nm, front, tires[0]),
+            (x0.omega_rear_radps, predicted_r, x1.torque_rear_nm, rear, tires[1]),
         ):
             # Tangent stiffness dF_x/dω (clamped at 0 beyond the peak) for the implicit step.
             fx_plus, _, _, _ = tire_forces_scalar(
                 axle.slip_ratio + _SLIP_DIFFERENCE_STEP, axle.slip_angle_rad, axle.fz_n, axle.mu,
-                p.tire,
+                tire,
             )
             slope = (
                 max((fx_plus - axle.fx_n) / _SLIP_DIFFERENCE_STEP, 0.0)
@@ -374,9 +403,13 @@ class Plant:
                 new.append(0.0)
         return new[0], new[1]
 
-    def _output(self, x: PlantStateVector, mu_f: float, mu_r: float) -> PlantOutput:
+    def _output(
+        self, x: PlantStateVector, mu_f: float, mu_r: float, tires: tuple[TireParams, TireParams]
+    ) -> PlantOutput:
         p = self.params
-        front, rear = axle_outputs(x, x.omega_front_radps, x.omega_rear_radps, mu_f, mu_r, p)
+        front, rear = axle_outputs(
+            x, x.omega_front_radps, x.omega_rear_radps, mu_f, mu_r, p, *tires
+        )
         cos_d, sin_d = math.cos(x.steer_rad), math.sin(x.steer_rad)
         m = p.mass_kg
         return PlantOutput(
