@@ -381,17 +381,18 @@ def make_configuration(
         initial_mu=initial_local_mu,
         timing=local_timing,
     )
-    common = dict(
-        local=local, classes=table, predictive_error=predictive_error, rng=rng, range_m=range_m
-    )
     simple = {c.configuration: c for c in (GroundTruth, LocalOnly, PredictiveOnly)}
     if configuration in simple:
-        return simple[configuration](**common)
+        return simple[configuration](
+            local=local, classes=table, predictive_error=predictive_error, rng=rng,
+            range_m=range_m,
+        )
     prior = PAPER_PRIOR
     if length_scale_m is not None:
         if not (math.isfinite(length_scale_m) and length_scale_m > 0.0):
             raise ValueError(f"length_scale_m must be finite and > 0 m, got {length_scale_m!r}")
         prior = dataclasses.replace(PAPER_PRIOR, length_scale_m=float(length_scale_m))
     return Fused(
-        configuration=configuration, prior=prior, s_local_m=s_local_m, **common
+        configuration=configuration, prior=prior, s_local_m=s_local_m, local=local,
+        classes=table, predictive_error=predictive_error, rng=rng, range_m=range_m,
     )

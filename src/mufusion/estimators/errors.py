@@ -75,6 +75,8 @@ def signed_error(error: str, margin: np.ndarray | float, rng: np.random.Generato
     if error == "worst_under":
         return -m if m.ndim else -float(m)
     if error == "random":
+        if rng is None:
+            raise ValueError("rng: the 'random' error model needs a numpy.random.Generator")
         e = rng.uniform(-1.0, 1.0, size=m.shape) * m
         return e if m.ndim else float(e)
     return np.zeros_like(m) if m.ndim else 0.0

@@ -162,6 +162,8 @@ def predictive_estimate(
     elif error == "random":
         # One camera estimate per contiguous class segment: a common error within a segment.
         segment = _segment_ids(idx)
+        if rng is None:
+            raise ValueError("rng: the 'random' error model needs a numpy.random.Generator")
         e_unit = rng.uniform(-1.0, 1.0, size=int(segment[-1]) + 1 if idx.size else 0)
         report[seen] = mu[seen] + e_unit[segment] * margins[idx]
     else:

@@ -185,7 +185,7 @@ def draw_obstacles(ax: Axes, meta: RunMeta, time_s: float) -> int:
     """Draw the obstacles active at ``time_s``; returns how many were drawn."""
     drawn = 0
     for obstacle in meta.obstacles:
-        if time_s + 1e-9 < obstacle.appear_time_s:
+        if obstacle.appear_time_s is not None and time_s + 1e-9 < obstacle.appear_time_s:
             continue
         corners = np.column_stack([obstacle.corners_x_m, obstacle.corners_y_m])
         ax.add_patch(

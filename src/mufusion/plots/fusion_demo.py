@@ -21,7 +21,7 @@ from matplotlib.figure import Figure
 
 from mufusion.configurations import FrictionEstimate, make_configuration
 from mufusion.estimators import CAMERA_RANGE_M
-from mufusion.fusion import LOCAL_GROUP, PAPER_PRIOR
+from mufusion.fusion import LOCAL_GROUP, PAPER_PRIOR, FusionData
 from mufusion.plots._common import save_figure
 
 # Two-sided 95 % quantile of the standard normal (paper Sec. III: margins are 95 % intervals).
@@ -70,14 +70,16 @@ def demo_estimates(
     return out
 
 
-def _local_mask(estimate: FrictionEstimate) -> np.ndarray:
+def _local_mask(data: FusionData) -> np.ndarray:
     """Which fusion input points came from the local estimate (the rest are the camera's)."""
-    return np.asarray(estimate.data.groups) == LOCAL_GROUP
+    return np.asarray(data.groups) == LOCAL_GROUP
 
 
 def _draw_panel(ax: Axes, mode: str, mu_true: np.ndarray, est: FrictionEstimate, prior) -> None:
     s = est.s_m
     fused, data = est.fused, est.data
+    if fused is None or data is None:
+        raise ValueError("the demonstration needs a fused configuration (F or F-safe)")
     prior_mean, prior_std = float(prior.mean), float(prior.std)
     ax.axhspan(prior_mean - _Z95 * prior_std, prior_mean + _Z95 * prior_std, color="0.85",
                lw=0, label="prior 95 % band", gid="prior")
@@ -86,7 +88,7 @@ def _draw_panel(ax: Axes, mode: str, mu_true: np.ndarray, est: FrictionEstimate,
     ax.fill_between(s, mean - _Z95 * std, mean + _Z95 * std, color=_POSTERIOR_COLOR,
                     alpha=0.22, lw=0, label="posterior 95 % band", gid="posterior_band")
     ax.plot(s, mean, color=_POSTERIOR_COLOR, lw=1.2, label="posterior mean", gid="posterior_mean")
-    local = _local_mask(est)
+    local = _local_mask(data)
     ds, dmu, dm = (np.asarray(a, dtype=float) for a in (data.s_m, data.mu, data.margin))
     if np.any(~local):
         ax.errorbar(ds[~local], dmu[~local], yerr=dm[~local], fmt="o", ms=3, color="0.25",

@@ -24,7 +24,7 @@ from mufusion.planner import (
 )
 from mufusion.road import Obstacle, Road, obstacle_corners
 from mufusion.scenarios.config import PopupScenario, TurnScenario, planner_lane_bounds_m
-from mufusion.scenarios.feasibility import classify_scenario, summary_fields
+from mufusion.scenarios.feasibility import classify_scenario
 from mufusion.sim.log import RunLog
 from mufusion.sim.loop import ClosedLoop
 from mufusion.sim.records import (
@@ -162,6 +162,7 @@ def run_meta(
             )
         )
     rates = cfg.rates()
+    feasibility = classify_scenario(cfg, params)
     return RunMeta(
         scenario_name=cfg.name,
         configuration=configuration,
@@ -203,5 +204,8 @@ def run_meta(
         start_heading_rad=float(math.atan2(y[1] - y[0], x[1] - x[0])),
         comparison_time_s=cfg.comparison_time_s,
         duration_s=cfg.duration_s,
-        **summary_fields(classify_scenario(cfg, params)),
+        feasibility=feasibility.feasibility_class.value,
+        feasibility_margin_mps=(
+            feasibility.margin_mps if math.isfinite(feasibility.margin_mps) else None
+        ),
     )

@@ -163,7 +163,7 @@ class Recorder:
                 step=step,
                 t_s=t_s,
                 k=np.arange(n),
-                t_k_s=t_s + np.arange(n) * plan.dt_s,
+                t_k_s=t_s + np.arange(n, dtype=np.float64) * plan.dt_s,
                 s_m=s_k,
                 d_m=d_k,
                 dpsi_rad=states[:, State.dpsi],

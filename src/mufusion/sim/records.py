@@ -178,7 +178,14 @@ class Event:
 
 ROW_RECORDS: tuple[type, ...] = (Tick, PlanningStep, StepTiming, Event)
 BLOCK_RECORDS: tuple[type, ...] = (PlanStages, EstimateGrid)
-RECORD_TYPES: dict[str, type] = {r.table: r for r in (*ROW_RECORDS, *BLOCK_RECORDS)}
+RECORD_TYPES: dict[str, type] = {
+    Tick.table: Tick,
+    PlanningStep.table: PlanningStep,
+    PlanStages.table: PlanStages,
+    EstimateGrid.table: EstimateGrid,
+    StepTiming.table: StepTiming,
+    Event.table: Event,
+}
 """Table name → record type, in the order the tables are written."""
 
 
@@ -226,7 +233,8 @@ class ObstacleTrace(_Meta):
     d_m: float
     length_m: float
     width_m: float
-    appear_time_s: float
+    appear_time_s: float | None
+    """When it appears [s]; None when it is there from the start or appears by position."""
     corners_x_m: list[float]
     corners_y_m: list[float]
 
