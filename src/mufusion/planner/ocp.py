@@ -79,6 +79,9 @@ class PlannerConfig:
     min_speed_mps: float = 0.5
     cold_start_iterations: int = 3
     max_cruise_accel_mps2: float = 1.5
+    # Track min(cruise speed, the point mass's highest speed along the lane centre) instead of the
+    # cruise speed alone (planner/speed_profile.py).
+    curve_speed_reference: bool = True
 
     def __post_init__(self) -> None:
         if not 5 <= self.horizon_steps <= 200:

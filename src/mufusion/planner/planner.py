@@ -31,6 +31,7 @@ from mufusion.planner.sampling import (
     tracking_cost,
     violation_m,
 )
+from mufusion.planner.speed_profile import curve_speed_reference_mps
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -209,8 +210,14 @@ class TractionAdaptivePlanner:
                 guess_x, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m,
                 curvature_of_s(guess_x[1:, State.s]),
             )
-            yref, weights = self._reference(stage["curvature"], mode, reference_speed_mps,
-                                            reference_d_m)
+            speed_ref: float | np.ndarray = reference_speed_mps
+            if cfg.curve_speed_reference and mode != "emergency":
+                speed_ref = curve_speed_reference_mps(
+                    guess_x[:, State.s], curvature_of_s, mu_hat_of_s, reference_speed_mps,
+                    cfg.utilization_factor * np.cos(np.pi / cfg.polygon_sides),
+                    cfg.horizon_steps * cfg.dt_s,
+                )
+            yref, weights = self._reference(stage["curvature"], mode, speed_ref, reference_d_m)
             status = -1
             try:
                 status, xs, us = self._backend.solve(
@@ -280,7 +287,9 @@ class TractionAdaptivePlanner:
             _log.warning("sampling augmentation failed: %r", exc)
             return guess_x, guess_u, False
 
-    def _reference(self, curvature: np.ndarray, mode: str, v_ref: float, d_ref: float):
+    def _reference(
+        self, curvature: np.ndarray, mode: str, v_ref: float | np.ndarray, d_ref: float
+    ):
         w: CostWeights = self.config.weights
         n = self.config.horizon_steps
         f_w = w.force_per_kn * 1e-6
