@@ -6,10 +6,12 @@ the oracle's verdict and margin, the speed at the curve's start and at the arc's
 arc's limit ``√(λ μ g R)``, the speed the first plan meant to have at the arc's start, the deepest
 footprint point outside the lane [cm] with the corner and where, the largest planned excursion
 beyond the planner's own lateral corridor (slack in use) [cm], and the largest tracking error of
-the lateral offset against the current plan [cm].
+the lateral offset against the current plan [cm], and the time at which the curve's end is
+passed [s].
 
 Run: ``python benchmarks/gt_turn_limits.py [--out DIR] [--jobs N] [FILE]``; ``--reuse`` reads the
-logs of an earlier run in DIR instead of simulating. Prints a table and a final JSON line; numbers
+logs of an earlier run in DIR instead of simulating; ``--where KEY=VALUE`` keeps only the variants
+with that grid value (e.g. ``--where vehicle=truck``). Prints a table and a final JSON line; numbers
 go to docs/feasibility.md, section "GT at the limit".
 """
 
@@ -45,6 +47,7 @@ def diagnose(directory: Path, overrides: list[str]) -> dict:
     road, s0 = build_road(cfg, par)
     curve_start = s0 + cfg.turn.start_ahead_m
     arc_start = curve_start + cfg.turn.clothoid_m
+    curve_end = curve_start + cfg.turn.radius_m * cfg.turn.angle_rad + cfg.turn.clothoid_m
     verdict = classify_scenario(cfg, par)
     # Footprint (centred between the axles) corners, projected on the lane centre.
     shift = 0.5 * (par.cog_to_front_axle_m - par.cog_to_rear_axle_m)
@@ -79,7 +82,9 @@ def diagnose(directory: Path, overrides: list[str]) -> dict:
     v_lim = math.sqrt(cfg.planner.utilization_factor * cfg.friction.mu_turn * 9.81
                       * cfg.turn.radius_m)
     return {
-        "vehicle": cfg.vehicle, "v0_mps": cfg.initial_speed_mps, "mu": cfg.friction.mu_turn,
+        "vehicle": cfg.vehicle, "dir": cfg.turn.direction, "start_m": cfg.turn.start_ahead_m,
+        "clothoid_m": cfg.turn.clothoid_m, "v0_mps": cfg.initial_speed_mps,
+        "mu": cfg.friction.mu_turn,
         "oracle": verdict.feasibility_class.value, "margin_mps": round(verdict.margin_mps, 2),
         "v_lim_mps": round(v_lim, 2),
         "v_curve_mps": round(float(np.interp(curve_start, s, v)), 2),
@@ -90,6 +95,8 @@ def diagnose(directory: Path, overrides: list[str]) -> dict:
         "at_s_m": round(float(s[i] - curve_start), 1) if outside.max() > 0.0 else None,
         "slack_cm": round(100.0 * max(slack, 0.0), 1),
         "tracking_cm": round(100.0 * track, 1),
+        "t_exit_s": round(float(np.interp(curve_end, s, ts["t_s"])), 2)
+        if s[-1] >= curve_end else None,
     }
 
 
@@ -99,17 +106,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="results/gt-turn-limits")
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--reuse", action="store_true", help="read existing logs in --out")
+    parser.add_argument("--where", action="append", default=[],
+                        help="KEY=VALUE: keep only the variants with this grid value")
     args = parser.parse_args(argv)
     campaign = load_campaign(args.file)
-    specs = [s for s in campaign_specs(campaign) if s.config == "GT"]
+    specs = [s for s in campaign_specs(campaign) if s.config == "GT"
+             and all(w in s.overrides for w in args.where)]
     out = Path(args.out)
     if not args.reuse:
         run_campaign(specs, out, jobs=args.jobs)
     rows = [diagnose(out / spec.slug, list(spec.overrides)) for spec in specs]
     keys = list(rows[0])
-    print(" ".join(f"{k:>15}" for k in keys))
+    width = {k: max(len(k), *(len(str(r[k])) for r in rows)) for k in keys}
+    print(" ".join(f"{k:>{width[k]}}" for k in keys))
     for row in rows:
-        print(" ".join(f"{row[k]!s:>15}" for k in keys))
+        print(" ".join(f"{row[k]!s:>{width[k]}}" for k in keys))
     feasible = [r for r in rows if r["oracle"] == "feasible"]
     print(json.dumps({
         "runs": len(rows), "feasible": len(feasible),
