@@ -153,6 +153,9 @@ class PlannerConfig:
     plausibility: PlausibilityLimits = field(default_factory=PlausibilityLimits)
     stiffness: StiffnessModel = "fixed"
     stiffness_table: SurfaceTireTable | None = None
+    # Track min(cruise speed, the point mass's highest speed along the lane centre) instead of the
+    # cruise speed alone (planner/speed_profile.py).
+    curve_speed_reference: bool = True
 
     def __post_init__(self) -> None:
         if self.stiffness not in STIFFNESS_MODELS:
@@ -382,7 +385,7 @@ def tracking_reference(
     mu_hat: np.ndarray,
     mode: str,
     speed_mps: float,
-    reference_speed_mps: float,
+    reference_speed_mps: float | np.ndarray,
     reference_d_m: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Least-squares reference ``yref (N+1, 9)`` over ``[x; u]`` and its weights ``(9,)``.
@@ -401,7 +404,8 @@ def tracking_reference(
     speed_mps
         Current speed [m/s] (start of the minimal-risk profile).
     reference_speed_mps, reference_d_m
-        Cruise speed and lateral offset (the lane centre) targets.
+        Cruise speed (one value, or one per stage 0..N) and lateral offset (the lane centre)
+        targets.
 
     Returns
     -------
@@ -411,7 +415,7 @@ def tracking_reference(
     w = config.weights
     n = config.horizon_steps
     f_w = w.force_per_kn * 1e-6
-    v = np.full(n + 1, float(reference_speed_mps))
+    v = np.broadcast_to(np.asarray(reference_speed_mps, dtype=float), (n + 1,)).copy()
     speed_w = w.speed
     if mode == "emergency":
         speed_w, v[:] = w.emergency_speed, 0.0

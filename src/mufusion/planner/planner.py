@@ -39,6 +39,7 @@ from mufusion.planner.sampling import (
     tracking_cost,
     violation_m,
 )
+from mufusion.planner.speed_profile import curve_speed_reference_mps
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -253,6 +254,14 @@ class TractionAdaptivePlanner:
         reason = FallbackReason.NONE
         for _ in range(iterations):
             guess_x, guess_u = xs, us
+            speed_ref: float | np.ndarray = reference_speed_mps
+            if cfg.curve_speed_reference and mode in ("cruise", "evade"):
+                # Before the stage parameters: those count the sanitised μ̂ of the stages.
+                speed_ref = curve_speed_reference_mps(
+                    guess_x[:, State.s], curvature_of_s, mu_of_s, reference_speed_mps,
+                    cfg.utilization_factor * np.cos(np.pi / cfg.polygon_sides),
+                    cfg.horizon_steps * cfg.dt_s,
+                )
             stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
                                      cfg.utilization_factor, cfg.stiffness_table)
             d_lo, d_hi = lateral_corridor(
@@ -261,7 +270,7 @@ class TractionAdaptivePlanner:
             )
             yref, weights = tracking_reference(
                 cfg, stage["curvature"], stage["mu_hat"], mode, float(x0[State.vx]),
-                reference_speed_mps, reference_d_m,
+                speed_ref, reference_d_m,
             )
             status = -1
             try:

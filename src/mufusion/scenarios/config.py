@@ -137,6 +137,10 @@ class PlannerSettings(_Strict):
     """Cornering stiffness of the planner's rear tire and the controller's inverse tire model:
     ``fixed`` (the vehicle's tire on every surface) or ``from_mu_hat`` (the plant's tire table,
     ``sim.tires``, at the estimate μ̂, as the authors' planner and controller computed it)."""
+    curve_speed_reference: bool = True
+    """Track the highest speed a point mass could hold along the road with μ̂ (curves and
+    friction ahead, beyond the horizon) instead of the cruise speed alone
+    (``docs/feasibility.md``, "GT at the limit")."""
 
 
 SimTires = Literal["default", "authors", "authors_interpolated"]

@@ -56,6 +56,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         utilization_factor=cfg.planner.utilization_factor,
         backend=cfg.planner.backend,
         use_sampling=cfg.planner.use_sampling,
+        curve_speed_reference=cfg.planner.curve_speed_reference,
         lane_d_min_m=lo,
         lane_d_max_m=hi,
         safety=cfg.safety,

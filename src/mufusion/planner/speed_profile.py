@@ -1,0 +1,116 @@
+"""Curvature- and friction-aware speed reference: the point mass's highest speed along the road.
+
+A cost that tracks a constant cruise speed pulls every plan to the friction limit wherever the
+road curves, and only as far as the horizon reaches: the plans brake as late as the model allows,
+enter the curve at its limit and end the horizon accelerating inside it. Any mismatch between the
+plan and the vehicle then leaves no room but the lane's. Tracking instead the highest speed a point
+mass could hold along the lane centre with the friction the planner may use (``v² |κ| ≤ a`` and,
+before a tighter point, braking with ``√(a² − (v²κ)²)``; ``a = λ cos(π/n) μ̂ g``, what an n-sided
+polygon of radius ``λ μ̂ F_z`` grants in pure braking or cornering) asks for a speed the plan can
+keep, sees curves beyond the time horizon (the profile reaches a stopping distance further), and
+leaves the lane's play as a margin.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from mufusion.vehicle.params import GRAVITY_MPS2
+
+PROFILE_STEP_M = 1.0
+"""Grid step of the profile [m]; each step brakes with its larger curvature (errs slow)."""
+MAX_LOOKAHEAD_M = 300.0
+"""Longest stretch of road the profile looks at [m]."""
+
+
+def max_speed_profile_mps(
+    s_m: np.ndarray,
+    curvature_1pm: np.ndarray,
+    mu: np.ndarray,
+    accel_fraction: float,
+    end_speed_mps: float,
+) -> np.ndarray:
+    """Highest speed at each grid point from which every later curvature limit can be met.
+
+    Parameters
+    ----------
+    s_m
+        Increasing progress grid [m], shape (M,).
+    curvature_1pm, mu
+        Road curvature [1/m] and friction [-] at the grid points, shape (M,).
+    accel_fraction
+        Fraction of ``μ g`` the point mass may use, in (0, 1].
+    end_speed_mps
+        Speed allowed beyond the last grid point [m/s] (e.g. the cruise speed).
+
+    Returns
+    -------
+    ndarray
+        Shape (M,) [m/s], never above ``end_speed_mps``.
+
+    Raises
+    ------
+    ValueError
+        If the arrays differ in shape, ``s_m`` does not increase, or ``accel_fraction`` is not in
+        (0, 1].
+
+    Examples
+    --------
+    >>> s = np.arange(0.0, 31.0)
+    >>> k = np.where(s >= 20.0, 1.0 / 28.0, 0.0)
+    >>> v = max_speed_profile_mps(s, k, np.full(s.size, 0.4), 0.9, 20.0)
+    >>> # √(3.5316·28); the step into the arc brakes with its curvature: √(98.8848 + 2·3.5316·19)
+    >>> round(float(v[-1]), 3), round(float(v[0]), 3)
+    (9.944, 15.267)
+    """
+    s = np.asarray(s_m, dtype=float)
+    kappa = np.abs(np.asarray(curvature_1pm, dtype=float))
+    mu_arr = np.asarray(mu, dtype=float)
+    if not (s.shape == kappa.shape == mu_arr.shape and s.ndim == 1 and s.size >= 1):
+        raise ValueError("s_m, curvature_1pm and mu must be 1-D arrays of equal length")
+    if np.any(np.diff(s) <= 0.0):
+        raise ValueError("s_m must increase")
+    if not 0.0 < accel_fraction <= 1.0:
+        raise ValueError(f"accel_fraction must be in (0, 1], got {accel_fraction!r}")
+    accel = accel_fraction * mu_arr * GRAVITY_MPS2
+    with np.errstate(divide="ignore"):
+        limit = np.where(kappa > 0.0, accel / np.maximum(kappa, 1e-300), np.inf)
+    u = np.minimum(limit, end_speed_mps**2)
+    for i in range(s.size - 2, -1, -1):
+        k = max(kappa[i], kappa[i + 1])
+        a = accel[i]
+        lateral = u[i + 1] * k
+        braking = math.sqrt(max(a * a - lateral * lateral, 0.0))
+        u[i] = min(u[i], u[i + 1] + 2.0 * braking * (s[i + 1] - s[i]))
+    return np.sqrt(u)
+
+
+def curve_speed_reference_mps(
+    stage_s_m: np.ndarray,
+    curvature_of_s: Callable[[np.ndarray], np.ndarray],
+    mu_hat_of_s: Callable[[np.ndarray], np.ndarray],
+    cruise_speed_mps: float,
+    accel_fraction: float,
+    horizon_time_s: float,
+) -> np.ndarray:
+    """The cruise speed capped by :func:`max_speed_profile_mps` at the stages' positions.
+
+    The profile runs from the first stage over the horizon's reach at the cruise speed plus the
+    stopping distance from it at the lowest μ̂ ahead (at most :data:`MAX_LOOKAHEAD_M`), so a
+    curve beyond the horizon already lowers the reference of its last stages.
+    """
+    s0 = float(stage_s_m[0])
+    coarse = s0 + np.arange(0.0, MAX_LOOKAHEAD_M + PROFILE_STEP_M, PROFILE_STEP_M)
+    mu_min = max(float(np.min(mu_hat_of_s(coarse))), 0.05)
+    reach = cruise_speed_mps * horizon_time_s + cruise_speed_mps**2 / (
+        2.0 * accel_fraction * mu_min * GRAVITY_MPS2)
+    grid = coarse[coarse <= s0 + min(reach, MAX_LOOKAHEAD_M) + PROFILE_STEP_M]
+    profile = max_speed_profile_mps(
+        grid, np.asarray(curvature_of_s(grid), dtype=float) * np.ones_like(grid),
+        np.clip(np.asarray(mu_hat_of_s(grid), dtype=float), 0.05, 2.0), accel_fraction,
+        cruise_speed_mps,
+    )
+    return np.interp(np.asarray(stage_s_m, dtype=float), grid, profile)

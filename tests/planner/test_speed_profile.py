@@ -1,0 +1,109 @@
+"""Curvature- and friction-aware speed reference: hand calculations and its effect on the plan."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mufusion.planner.ocp import PlannerConfig
+from mufusion.planner.planner import TractionAdaptivePlanner
+from mufusion.planner.speed_profile import curve_speed_reference_mps, max_speed_profile_mps
+from mufusion.vehicle.params import TRUCK
+from mufusion.vehicle.planner_model import State
+
+ARC_START_M = 30.0
+RADIUS_M = 28.0
+
+
+def _curvature(s):
+    return np.where(np.asarray(s, dtype=float) >= ARC_START_M, 1.0 / RADIUS_M, 0.0)
+
+
+def _mu(value):
+    return lambda s: value + 0.0 * np.asarray(s, dtype=float)
+
+
+def test_profile_matches_hand_calculation_on_a_fine_grid() -> None:
+    s = np.arange(0.0, 40.01, 0.01)
+    v = max_speed_profile_mps(s, _curvature(s), np.full(s.size, 0.4), 0.9, 30.0)
+    # On the arc: √(0.9·0.4·9.81·28) = √98.8848 = 9.94408 m/s
+    assert v[-1] == pytest.approx(9.94408, abs=1e-5)
+    # 30 m before it: √(98.8848 + 2·3.5316·30) = √310.7808 = 17.62898 m/s, less one 1 cm step
+    # (√(98.8848 + 2·3.5316·29.99) = √310.71016 = 17.62697)
+    assert v[0] == pytest.approx(17.62697, abs=1e-4)
+
+
+def test_profile_is_capped_by_the_end_speed_and_flat_on_a_straight() -> None:
+    s = np.arange(0.0, 100.0)
+    v = max_speed_profile_mps(s, np.zeros_like(s), np.full(s.size, 0.5), 0.9, 14.0)
+    assert np.allclose(v, 14.0)
+
+
+def test_profile_respects_every_curvature_limit() -> None:
+    s = np.arange(0.0, 120.0, 0.5)
+    kappa = np.interp(s, [0, 40, 45, 80, 85, 120], [0, 0, 1 / 20, 1 / 20, 0, 0])
+    mu = np.where(s > 60.0, 0.3, 0.8)
+    v = max_speed_profile_mps(s, kappa, mu, 0.9, 25.0)
+    with np.errstate(divide="ignore"):
+        limit = np.sqrt(0.9 * mu * 9.81 / kappa)
+    assert np.all(v <= limit + 1e-9)
+    # Decelerating between grid points never needs more than the friction the profile may use.
+    dv2 = np.diff(v**2) / np.diff(s)
+    assert np.all(-dv2 / 2.0 <= 0.9 * 0.8 * 9.81 + 1e-9)
+
+
+def test_profile_rejects_bad_input() -> None:
+    s = np.arange(3.0)
+    with pytest.raises(ValueError, match="accel_fraction"):
+        max_speed_profile_mps(s, np.zeros(3), np.ones(3), 1.5, 10.0)
+    with pytest.raises(ValueError, match="s_m must increase"):
+        max_speed_profile_mps(s[::-1], np.zeros(3), np.ones(3), 0.9, 10.0)
+    with pytest.raises(ValueError, match="equal length"):
+        max_speed_profile_mps(s, np.zeros(2), np.ones(3), 0.9, 10.0)
+
+
+def test_reference_sees_a_curve_beyond_the_time_horizon() -> None:
+    # Stages cover 0–56 m (4 s at 14 m/s); the arc starts at 100 m on μ 0.4.
+    stages = np.linspace(0.0, 56.0, 41)
+    ref = curve_speed_reference_mps(stages, lambda s: np.where(np.asarray(s) >= 100.0, 1 / 28, 0.0),
+                                    _mu(0.4), 14.0, 0.9, 4.0)
+    assert ref[0] == pytest.approx(14.0)
+    # 44 m before the arc: √(98.8848 + 2·3.5316·43) = 19.4 m/s > 14, so still the cruise speed;
+    # a tighter curve (R = 10 m) at 100 m must already slow the last stages.
+    tight = curve_speed_reference_mps(stages, lambda s: np.where(np.asarray(s) >= 100.0, 0.1, 0.0),
+                                      _mu(0.2), 14.0, 0.9, 4.0)
+    assert tight[-1] < 14.0 - 0.5
+    assert np.all(np.diff(tight) <= 1e-12)
+
+
+@pytest.fixture(scope="module")
+def planners() -> tuple[TractionAdaptivePlanner, TractionAdaptivePlanner]:
+    lane = dict(lane_d_min_m=-0.35, lane_d_max_m=0.35)
+    return (TractionAdaptivePlanner(TRUCK, PlannerConfig(**lane)),
+            TractionAdaptivePlanner(TRUCK, PlannerConfig(curve_speed_reference=False, **lane)))
+
+
+def _arc_entry_speed(planner: TractionAdaptivePlanner, steps: int = 25) -> float:
+    """Speed at the arc's start when the planner's model follows each plan's first step."""
+    planner._prev = None
+    x = np.array([0.0, 0.0, 0.0, 0.0, 14.0, 0.0])
+    states = [x]
+    for i in range(steps):
+        plan = planner.step(x, 0.1 * i, _curvature, _mu(0.4), [], "cruise", 14.0)
+        x = plan.states[1]
+        states.append(x)
+    trajectory = np.array(states)
+    return float(np.interp(ARC_START_M, trajectory[:, State.s], trajectory[:, State.vx]))
+
+
+def test_plan_enters_the_arc_at_the_speed_it_can_hold(planners) -> None:
+    with_ref, without = planners
+    # What the 12-gon of radius λμF_z grants in pure cornering: √(0.9·cos15°·0.4·9.81·28) = 9.773
+    v_polygon = math.sqrt(0.9 * math.cos(math.pi / 12) * 0.4 * 9.81 * RADIUS_M)
+    v_with, v_without = _arc_entry_speed(with_ref), _arc_entry_speed(without)
+    assert v_with <= v_polygon + 0.15
+    # Tracking the cruise speed alone, the plans brake as late as their horizon allows and the
+    # vehicle reaches the arc far above what it can hold there (11.4 m/s when this was written).
+    assert v_without > v_with + 1.0
