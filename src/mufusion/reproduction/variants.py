@@ -143,9 +143,12 @@ class Variant:
         return (*facts, extra) if extra is not None else facts
 
 
-PAPER_METHOD: tuple[str, ...] = ("probing.enabled=false", "lane_recovery.enabled=false")
-"""The paper's method: without our supervisory layers (friction probing, lane recovery), which
-go beyond it (:mod:`mufusion.sim.supervision`)."""
+PAPER_METHOD: tuple[str, ...] = (
+    "probing.enabled=false", "lane_recovery.enabled=false", "planner.curve_speed_reference=false",
+)
+"""The paper's method: a planner that tracks the cruise speed (TAMP), without our additions that
+go beyond it: friction probing and lane recovery (:mod:`mufusion.sim.supervision`) and the curve-
+and friction-aware speed reference (:mod:`mufusion.planner.speed_profile`)."""
 
 TURN_SNAPSHOTS_M = (0.0, 15.0, 30.0, 55.0)
 POPUP_SNAPSHOTS_M = (0.0, 2.0, 18.0, 40.0)
