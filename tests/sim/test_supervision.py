@@ -1,0 +1,135 @@
+"""Probing and lane recovery: they trigger only when they should, stay bounded, and are logged."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mufusion.configurations import FrictionEstimate
+from mufusion.fusion import FusedEstimate
+from mufusion.metrics import compute_metrics
+from mufusion.scenarios import load_scenario
+from mufusion.scenarios.runner import run_scenario
+from mufusion.sim.supervision import (
+    LaneRecoverySettings,
+    Prober,
+    ProbingSettings,
+    lane_violation_m,
+    relaxed_estimate,
+)
+
+GRID = np.arange(0.0, 51.0)
+
+
+def _estimate(mu_hat: float = 0.1, mean: float = 0.3, local: bool = False, fused: bool = True):
+    post = FusedEstimate(GRID, np.full(51, mean), np.full(51, 0.05), np.full(51, mu_hat),
+                         np.full(51, mu_hat))
+    return FrictionEstimate(GRID, np.full(51, mu_hat), local, 0.3, fused=post if fused else None)
+
+
+def _curve_ahead(start_m: float = 20.0, radius_m: float = 28.0) -> np.ndarray:
+    return np.where(GRID >= start_m, -1.0 / radius_m, 0.0)
+
+
+def _prober(**settings) -> Prober:
+    return Prober(ProbingSettings(**settings), utilization_factor=0.9)
+
+
+def test_probe_starts_when_the_estimate_locks_out_a_curve_the_road_may_allow() -> None:
+    why = _prober().reason_to_probe(0.0, 12.0, _estimate(), _curve_ahead(), obstacle_near=False)
+    # 12² / (28 · 9.81) = 0.52 needed, 0.9 · 0.1 granted.
+    assert why is not None and "needs μ 0.52" in why and "grants 0.09" in why
+
+
+@pytest.mark.parametrize(
+    ("case", "kwargs"),
+    [
+        ("local estimate available", dict(estimate=_estimate(local=True))),
+        ("no posterior band (GT, L, P)", dict(estimate=_estimate(fused=False))),
+        ("narrow band", dict(estimate=_estimate(mu_hat=0.25, mean=0.3))),
+        ("enough friction granted", dict(estimate=_estimate(mu_hat=0.6, mean=0.9))),
+        ("in a curve", dict(curvature=_curve_ahead(start_m=0.0))),
+        ("obstacle near", dict(obstacle_near=True)),
+        ("too slow", dict(speed=4.0)),
+    ],
+)
+def test_probe_does_not_start(case: str, kwargs) -> None:
+    args = dict(estimate=_estimate(), curvature=_curve_ahead(), obstacle_near=False, speed=12.0)
+    args.update(kwargs)
+    why = _prober().reason_to_probe(0.0, args["speed"], args["estimate"], args["curvature"],
+                                    args["obstacle_near"])
+    assert why is None, case
+
+
+def test_probe_is_bounded_and_cools_down() -> None:
+    prober = _prober(max_decel_mps2=3.0, ramp_s=0.3, max_duration_s=0.6, max_speed_loss_mps=2.0,
+                     cooldown_s=2.0)
+    prober.start(1.0, 12.0)
+    assert prober.decel_mps2(1.15) == pytest.approx(1.5)
+    assert prober.decel_mps2(1.5) == pytest.approx(3.0)
+    assert prober.reason_to_stop(1.3, 11.5, local_available=False) is None
+    assert prober.reason_to_stop(1.3, 11.5, local_available=True) == "local estimate available"
+    assert prober.reason_to_stop(1.6, 11.5, False) == "longest probe reached"
+    assert prober.reason_to_stop(1.2, 9.9, False) == "largest speed loss reached"
+    assert prober.stop(1.4, 11.2) == pytest.approx(0.8)
+    # The local estimate is stale again, but a new probe waits for the cool-down.
+    assert prober.reason_to_probe(2.0, 11.2, _estimate(), _curve_ahead(), False) is None
+    assert prober.reason_to_probe(3.5, 11.2, _estimate(), _curve_ahead(), False) is not None
+    assert prober.probes == 1 and prober.speed_lost_mps == pytest.approx(0.8)
+
+
+def test_relaxation_moves_towards_the_mean_only() -> None:
+    est = _estimate(mu_hat=0.1, mean=0.3)
+    np.testing.assert_allclose(relaxed_estimate(est, 0.25).mu_hat, 0.15)
+    above = _estimate(mu_hat=0.4, mean=0.3)
+    assert relaxed_estimate(above, 1.0) is None  # never lowered, nothing to gain
+    assert relaxed_estimate(_estimate(fused=False), 1.0) is None
+    assert lane_violation_m(np.array([0.0, 0.5, -0.7]), (-0.45, 0.45)) == pytest.approx(0.25)
+    with pytest.raises(ValueError, match="lane_recovery.steps"):
+        LaneRecoverySettings(steps=(0.5, 0.25))
+    with pytest.raises(ValueError, match="probing.max_decel_mps2"):
+        ProbingSettings(max_decel_mps2=9.0)
+
+
+@pytest.fixture(scope="module")
+def caution_runs():
+    """F-safe at 12 m/s into the turn on μ 0.3 (μ̂ = 0.1, the snow/ice class minimum)."""
+    base = ["initial_speed_mps=12", "friction.mu_turn=0.3", "duration_s=8"]
+    variants = {
+        "neither": ["probing.enabled=false", "lane_recovery.enabled=false"],
+        "probing": ["lane_recovery.enabled=false"],
+        "both": [],
+    }
+    return {k: run_scenario(load_scenario("turn", [*base, *v]), "F-safe")
+            for k, v in variants.items()}
+
+
+@pytest.mark.slow
+def test_caution_alone_drives_off_and_lane_recovery_keeps_the_lane(caution_runs) -> None:
+    neither = compute_metrics(caution_runs["neither"])
+    both = compute_metrics(caution_runs["both"])
+    assert neither.max_lane_excursion_m > 1.0
+    assert both.max_lane_excursion_m == 0.0 and not both.minimal_risk
+    events = caution_runs["both"].events
+    assert (events["kind"] == "lane_recovery").sum() >= 3
+
+
+@pytest.mark.slow
+def test_probing_is_logged_bounded_and_makes_the_local_estimate_available(caution_runs) -> None:
+    log = caution_runs["probing"]
+    ev = log.events
+    start, end = ev[ev["kind"] == "probe_start"], ev[ev["kind"] == "probe_end"]
+    assert len(start) == 1 and len(end) == 1
+    duration = float(end["t_s"].iloc[0] - start["t_s"].iloc[0])
+    assert 0.0 < duration <= 0.6 + 1e-9
+    assert "local estimate available" in end["detail"].iloc[0]
+    ts = log.timeseries
+    probing = ts[ts["control_mode"] == "probing"]
+    assert len(probing) >= 2
+    v0 = float(ts["speed_mps"].iloc[0])
+    assert v0 - float(probing["speed_mps"].min()) <= 2.0
+    steps = log.planning_steps
+    assert steps[steps["t_s"] <= float(end["t_s"].iloc[0]) + 0.1]["local_available"].any()
+    # Without probing the local estimator never measures before the curve.
+    quiet = caution_runs["neither"].planning_steps
+    assert not quiet[quiet["t_s"] < 1.0]["local_available"].any()
