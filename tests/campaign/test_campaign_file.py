@@ -7,8 +7,8 @@ import json
 import pytest
 from typer.testing import CliRunner
 
+from mufusion.campaign import campaign_specs, load_campaign
 from mufusion.cli import app
-from mufusion.scenarios.campaign import campaign_specs, load_campaign
 
 SWEEP = """
 name = "test sweep"
