@@ -28,6 +28,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal, get_args
 
+from threadpoolctl import threadpool_limits
+
 from mufusion.campaign.specs import RunSpec
 from mufusion.metrics import RunMetrics, compute_metrics
 from mufusion.scenarios import load_scenario
@@ -140,15 +142,36 @@ def dispatch(
         _dispatch_pool(specs, handle, workers)
 
 
-def _ignore_sigint() -> None:
+def _set_up_worker(log_level: int) -> None:
+    """Make a worker process behave like one core of this campaign."""
+    # One BLAS thread per worker: OpenBLAS starts one per core in every process, and `jobs`
+    # workers each spinning `cores` threads over-subscribe the machine (measured: pool runs
+    # took 1.3–2× longer with them; docs/experiments.md).
+    threadpool_limits(limits=1, user_api="blas")
+    logging.getLogger("mufusion").setLevel(log_level)
+
+
+def _pool_worker(log_level: int) -> None:
     # The parent decides what Ctrl-C means: it stops the workers itself.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _set_up_worker(log_level)
+
+
+def _ray_task(spec: RunSpec, log_level: int) -> RunPayload:
+    _set_up_worker(log_level)
+    return execute_run(spec)
+
+
+def _parent_log_level() -> int:
+    return logging.getLogger("mufusion").getEffectiveLevel()
 
 
 def _dispatch_pool(
     specs: Sequence[RunSpec], handle: Callable[[RunPayload], None], workers: int
 ) -> None:
-    pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
+    pool = ProcessPoolExecutor(
+        max_workers=workers, initializer=_pool_worker, initargs=(_parent_log_level(),)
+    )
     try:
         futures: dict[Future[RunPayload], RunSpec] = {
             pool.submit(execute_run, spec): spec for spec in specs
@@ -200,8 +223,9 @@ def _dispatch_ray(
             include_dashboard=False,
             logging_level=logging.WARNING,
         )
-    task = ray.remote(num_cpus=1, max_retries=0)(execute_run)
-    pending = {task.remote(spec): spec for spec in specs}
+    task = ray.remote(num_cpus=1, max_retries=0)(_ray_task)
+    level = _parent_log_level()
+    pending = {task.remote(spec, level): spec for spec in specs}
     try:
         while pending:
             done, _ = ray.wait(list(pending), num_returns=1)

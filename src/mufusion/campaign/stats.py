@@ -143,7 +143,7 @@ def graded_summary(
         values = dict(zip(by, key if isinstance(key, tuple) else (key,), strict=True))
         for column in graded_columns(table, grid):
             x = group[column].dropna().to_numpy(dtype=float)
-            stats = {"count": len(x)}
+            stats: dict[str, float] = {"count": len(x)}
             if len(x):
                 p5, p50, p95 = np.percentile(x, [5, 50, 95])
                 stats |= {"mean": x.mean(), "std": x.std(ddof=1) if len(x) > 1 else 0.0,
