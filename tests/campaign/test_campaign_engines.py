@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import pytest
 
-from mufusion.campaign import campaign_specs, execute_campaign, load_campaign
+from mufusion.campaign import (
+    CampaignInterrupted,
+    campaign_specs,
+    execute_campaign,
+    load_campaign,
+)
 from mufusion.campaign.engines import dispatch
 from mufusion.campaign.stats import WALL_CLOCK_SUFFIX
 
@@ -56,3 +61,21 @@ def test_pool_and_local_ray_give_identical_runs_for_the_same_seeds(tmp_path):
 def test_dispatch_rejects_bad_options(kwargs, match):
     with pytest.raises(ValueError, match=match):
         dispatch([], print, **kwargs)
+
+
+@pytest.mark.slow
+def test_ctrl_c_cancels_the_ray_tasks_and_shuts_the_local_instance_down(tmp_path):
+    import ray
+
+    path = tmp_path / "c.toml"
+    path.write_text(CAMPAIGN.replace("seeds = 3", "seeds = 6"))
+    specs = campaign_specs(load_campaign(path))
+
+    def interrupt(_spec):
+        raise KeyboardInterrupt
+
+    with pytest.raises(CampaignInterrupted) as stop:
+        execute_campaign(specs, tmp_path / "runs", engine="ray", jobs=2, on_done=interrupt)
+    assert len(stop.value.finished) == 1 and len(stop.value.pending) == 5
+    assert not ray.is_initialized()
+    assert [p.name for p in (tmp_path / "runs").iterdir()] == [stop.value.finished[0].spec.name]

@@ -217,12 +217,15 @@ def _dispatch_ray(
     if started:
         if address is None:
             warm_up_solvers(specs)  # the local workers share this machine's solver cache
-        ray.init(
-            address=address,
-            num_cpus=None if address else (jobs or os.cpu_count() or 1),
-            include_dashboard=False,
-            logging_level=logging.WARNING,
-        )
+        try:
+            ray.init(
+                address=address,
+                num_cpus=None if address else (jobs or os.cpu_count() or 1),
+                include_dashboard=False,
+                logging_level=logging.WARNING,
+            )
+        except (ConnectionError, RuntimeError, ValueError) as err:
+            raise ValueError(f"cannot start or reach Ray (address={address!r}): {err}") from None
     task = ray.remote(num_cpus=1, max_retries=0)(_ray_task)
     level = _parent_log_level()
     pending = {task.remote(spec, level): spec for spec in specs}

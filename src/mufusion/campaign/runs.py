@@ -84,13 +84,6 @@ def execute_campaign(
     runs_dir.mkdir(parents=True, exist_ok=True)
     remove_temporaries(runs_dir)
     results: dict[RunSpec, RunResult] = {}
-    if resume:
-        for spec in specs:
-            found = _completed_run(runs_dir / spec.name, spec, seeds[spec])
-            if found is not None:
-                results[spec] = found
-                if on_done:
-                    on_done(spec)
 
     def store(payload: RunPayload) -> None:
         spec = payload.spec
@@ -104,8 +97,15 @@ def execute_campaign(
         if on_done:
             on_done(spec)
 
-    todo = [s for s in specs if s not in results]
     try:
+        if resume:
+            for spec in specs:
+                found = _completed_run(runs_dir / spec.name, spec, seeds[spec])
+                if found is not None:
+                    results[spec] = found
+                    if on_done:
+                        on_done(spec)
+        todo = [s for s in specs if s not in results]
         dispatch(todo, store, engine=engine, jobs=jobs, address=address)
     except KeyboardInterrupt:
         remove_temporaries(runs_dir)
