@@ -9,6 +9,6 @@ set -euo pipefail
 cd "$(dirname "$0")"
 PY=${PYTHON:-python3}
 "$PY" -m pip install --upgrade pip >/dev/null
-"$PY" -m pip install -e ".[dev,bench]"
+"$PY" -m pip install -e ".[dev,bench,scale]"
 "$PY" -m pip install --no-deps --force-reinstall "casadi==3.8.2"
 "$PY" -c "import casadi, mufusion; print('mufusion', mufusion.__version__, '| casadi', casadi.__version__)"

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import shlex
 import time
 from pathlib import Path
 from typing import Annotated, NoReturn
@@ -144,12 +145,13 @@ def reproduce(
 
 @app.command()
 def campaign(
-    file: Annotated[Path, typer.Argument(help="Campaign TOML: scenarios, configs, grid.")],
+    file: Annotated[Path, typer.Argument(help="Campaign TOML: scenarios, configs, grid, seeds.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path(
         "results/campaign"
     ),
     jobs: Annotated[
-        int | None, typer.Option(help="Worker processes (default: one per CPU core).")
+        int | None,
+        typer.Option(help="Parallel runs (default: one per CPU core; local Ray: its CPUs)."),
     ] = None,
     shard: Annotated[
         str,
@@ -158,29 +160,127 @@ def campaign(
             "a variant and its GT run always share a shard."
         ),
     ] = "0/1",
+    engine: Annotated[
+        str, typer.Option(help="Where runs execute: pool (processes on this machine) or ray.")
+    ] = "pool",
+    address: Annotated[
+        str | None,
+        typer.Option(help="Ray cluster address (with --engine ray); default: a local instance."),
+    ] = None,
+    resume: Annotated[
+        bool, typer.Option("--resume", help="Continue the campaign in --out: skip complete runs.")
+    ] = False,
+    overwrite: Annotated[
+        bool, typer.Option("--overwrite", help="Clear --out (an earlier campaign) first.")
+    ] = False,
 ) -> None:
-    """Run a campaign of scenario variants × configurations; writes every run's log and a
-    summary.json with a `runs` list (metrics, utilisation against the variant's GT run)."""
-    from mufusion.scenarios.campaign import campaign_specs, load_campaign
+    """Run a campaign of scenario variants × configurations × seeds.
+
+    Writes every run's log under OUT/runs, summary.json (a `runs` list: parameters, metrics,
+    utilisation against the variant's GT run, or the run's error) and the same rows as one table,
+    results.parquet / results.csv. Exit code 0: every run completed; 1: some runs failed (they
+    are rows with their error); 2: invalid input; 130: interrupted (summary marked partial).
+    """
+    from mufusion.campaign import (
+        ENGINES,
+        CampaignInterrupted,
+        campaign_specs,
+        execute_campaign,
+        load_campaign,
+        prepare_output,
+        write_results,
+    )
+    from mufusion.campaign.results import result_rows
 
     if jobs is not None and jobs < 1:
         _fail(f"--jobs must be >= 1, got {jobs}")
+    if engine not in ENGINES:
+        _fail(f"--engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+    if address is not None and engine != "ray":
+        _fail("--address needs --engine ray")
     parts = shard.split("/")
     if len(parts) != 2 or not all(p.strip().isdigit() for p in parts):
         _fail(f"--shard must be K/N with 0 <= K < N, got {shard!r}")
     k, n = int(parts[0]), int(parts[1])
     try:
-        specs = campaign_specs(load_campaign(file), shard=k, shards=n)
+        plan = load_campaign(file)
+        specs = campaign_specs(plan, shard=k, shards=n)
+        manifest = {"campaign": plan.model_dump(mode="json"), "shard": f"{k}/{n}"}
+        prepare_output(out, manifest, overwrite=overwrite, resume=resume)
     except ValueError as err:
         _fail(str(err))
     started = time.perf_counter()
-    _, runs = _run_specs(specs, out, jobs)
+    pending: list = []
+    with _progress() as progress:
+        task = progress.add_task("runs", total=len(specs))
+        try:
+            results = execute_campaign(
+                specs, out / "runs", engine=engine, jobs=jobs, address=address, resume=resume,
+                on_done=lambda _s: progress.advance(task),
+            )
+        except CampaignInterrupted as stop:
+            results, pending = stop.finished, stop.pending
+        except ValueError as err:
+            _fail(str(err))
     elapsed = time.perf_counter() - started
-    summary = {"campaign": str(file), "shard": shard, "runs": runs, "elapsed_s": round(elapsed, 1)}
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    _print_table(runs)
-    console.print(f"{len(runs)} runs in {elapsed:.0f} s; summary: {out / 'summary.json'}")
+    info = {"campaign": str(file), "name": plan.name, "shard": f"{k}/{n}", "engine": engine,
+            "elapsed_s": round(elapsed, 1)}
+    summary = write_results(out, results, info, partial=bool(pending), pending=len(pending))
+    rows = result_rows(results, out)
+    if len(rows) <= MAX_TABLE_ROWS:
+        _print_table(rows)
+    failed = [r for r in rows if r["error"] is not None]
+    for row in failed:
+        console.print(f"[red]failed:[/red] {row['run']}: {row['error']}")
+    resumed = sum(r.resumed for r in results)
+    console.print(
+        f"{len(rows) - len(failed)} runs completed ({resumed} found complete), {len(failed)} "
+        f"failed in {elapsed:.0f} s; summary: {summary}, table: {out / 'results.parquet'}"
+    )
+    if pending:
+        again = ["mufusion", "campaign", str(file), "--out", str(out), "--resume"]
+        again += [] if shard == "0/1" else ["--shard", shard]
+        again += [] if engine == "pool" else ["--engine", engine]
+        again += [] if address is None else ["--address", address]
+        again += [] if jobs is None else ["--jobs", str(jobs)]
+        console.print(
+            f"[yellow]interrupted:[/yellow] {len(pending)} runs did not run; summary.json is "
+            f"marked partial. Resume with:\n  {shlex.join(again)}"
+        )
+        raise typer.Exit(code=130)
+    if failed:
+        raise typer.Exit(code=1)
+
+
+# Campaigns larger than this print counts only; the table is in summary.json / results.csv.
+MAX_TABLE_ROWS = 40
+
+
+@app.command("campaign-report")
+def campaign_report(
+    directory: Annotated[Path, typer.Argument(help="Output directory of `mufusion campaign`.")],
+    out: Annotated[
+        Path | None, typer.Option("--out", "-o", help="Report directory (default: DIR/report).")
+    ] = None,
+) -> None:
+    """Monte Carlo report of a campaign: outcome rates per configuration with Wilson 95 %
+    intervals, distributions of the graded outcomes, heat maps over the grid, as report.md and
+    report.html."""
+    from mufusion.campaign.report import load_campaign_results, write_campaign_report
+    from mufusion.plots.campaign import campaign_figures
+
+    try:
+        data = load_campaign_results(directory)
+    except ValueError as err:
+        _fail(str(err))
+    target = out if out is not None else directory / "report"
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        _fail(f"--out {str(target)!r} is not writable: {err}")
+    figures = campaign_figures(data, target / "figures")
+    md, html = write_campaign_report(data, figures, target)
+    console.print(f"report: [bold]{md}[/bold], {html.name} ({len(figures)} figures)")
 
 
 @app.command("fusion-demo")
@@ -226,7 +326,7 @@ def fusion_demo(
 
 def _run_specs(specs: list, out: Path, jobs: int | None) -> tuple[list, list[dict]]:
     """Run a campaign's specs under a progress bar; its results and their ``runs`` entries."""
-    from mufusion.scenarios.campaign import run_campaign
+    from mufusion.campaign import run_campaign
 
     with _progress() as progress:
         task = progress.add_task("runs", total=len(specs))

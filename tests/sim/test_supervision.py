@@ -85,9 +85,9 @@ def test_relaxation_moves_towards_the_mean_only() -> None:
     assert relaxed_estimate(above, 1.0) is None  # never lowered, nothing to gain
     assert relaxed_estimate(_estimate(fused=False), 1.0) is None
     assert lane_violation_m(np.array([0.0, 0.5, -0.7]), (-0.45, 0.45)) == pytest.approx(0.25)
-    with pytest.raises(ValueError, match="lane_recovery.steps"):
+    with pytest.raises(ValueError, match=r"lane_recovery\.steps"):
         LaneRecoverySettings(steps=(0.5, 0.25))
-    with pytest.raises(ValueError, match="probing.max_decel_mps2"):
+    with pytest.raises(ValueError, match=r"probing\.max_decel_mps2"):
         ProbingSettings(max_decel_mps2=9.0)
 
 

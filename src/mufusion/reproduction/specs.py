@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+from mufusion.campaign import RunSpec, with_indices
 from mufusion.configurations import Configuration
 from mufusion.reproduction.variants import VARIANTS
-from mufusion.scenarios.campaign import RunSpec
 
 
 def reproduction_specs(include_car: bool = True) -> list[RunSpec]:
@@ -15,9 +15,9 @@ def reproduction_specs(include_car: bool = True) -> list[RunSpec]:
     >>> len(reproduction_specs(include_car=False))
     15
     """
-    return [
+    return with_indices([
         RunSpec(scenario=v.scenario, config=c.value, variant=v.key, overrides=v.overrides)
         for v in VARIANTS
         if include_car or v.paper_vehicle
         for c in Configuration
-    ]
+    ])

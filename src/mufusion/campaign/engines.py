@@ -1,0 +1,248 @@
+"""Execution engines: where the runs of a campaign execute.
+
+Every engine executes the same function, :func:`execute_run`, which loads the scenario, runs it,
+computes its metrics and returns them with the log's files as bytes: the parent process writes
+everything (atomically), so a worker that is stopped mid-run leaves nothing behind, and a Ray
+worker on another machine needs no shared file system.
+
+``pool``
+    A :class:`~concurrent.futures.ProcessPoolExecutor` on this machine (one process per job;
+    with one job the runs execute in this process).
+``ray``
+    Ray tasks: a local Ray instance with ``jobs`` CPUs, or the cluster at ``address``.
+
+On Ctrl-C (``KeyboardInterrupt`` in the parent, also one raised by the ``handle`` callback) an
+engine cancels the queued runs, stops the running ones and re-raises.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import tempfile
+from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal, get_args
+
+from threadpoolctl import threadpool_limits
+
+from mufusion.campaign.specs import RunSpec
+from mufusion.metrics import RunMetrics, compute_metrics
+from mufusion.scenarios import load_scenario
+from mufusion.scenarios.runner import planner_for, run_scenario
+
+Engine = Literal["pool", "ray"]
+ENGINES: tuple[str, ...] = get_args(Engine)
+
+_log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class RunPayload:
+    """What a worker sends back: the run's metrics and log files, or the error that ended it.
+
+    Attributes
+    ----------
+    spec
+        The run.
+    metrics
+        Its metrics (``None`` if it failed).
+    files
+        The log's files (name → contents), as :meth:`~mufusion.sim.log.RunLog.save` wrote them.
+    error
+        ``"<ExceptionType>: <message>"`` if the run raised, else ``None``.
+    """
+
+    spec: RunSpec
+    metrics: RunMetrics | None
+    files: dict[str, bytes]
+    error: str | None = None
+
+
+def execute_run(spec: RunSpec) -> RunPayload:
+    """Run one spec and return its metrics and log files; never raises for a failing run.
+
+    Exceptions become the payload's ``error`` (some, like LAPACK's, cannot be pickled across a
+    process boundary). ``KeyboardInterrupt`` is not caught: it stops the campaign.
+    """
+    try:
+        cfg = load_scenario(spec.scenario, spec.all_overrides)
+        log = run_scenario(cfg, spec.config)
+        metrics = compute_metrics(log)
+        with tempfile.TemporaryDirectory(prefix="mufusion-run-") as tmp:
+            log.save(tmp)
+            files = {p.name: p.read_bytes() for p in sorted(Path(tmp).iterdir())}
+    except Exception as exc:
+        return RunPayload(spec, None, {}, f"{type(exc).__name__}: {exc}")
+    return RunPayload(spec, metrics, files)
+
+
+def warm_up_solvers(specs: Iterable[RunSpec]) -> None:
+    """Build (or load from the cache) the planner of every vehicle the specs use, once, here,
+    so that workers only load the compiled solvers."""
+    seen = set()
+    for spec in specs:
+        cfg = load_scenario(spec.scenario, spec.all_overrides)
+        key = (cfg.vehicle, cfg.planner.horizon_steps, cfg.planner.dt_s, cfg.planner.backend)
+        if key not in seen:
+            seen.add(key)
+            planner_for(cfg)
+
+
+def dispatch(
+    specs: Sequence[RunSpec],
+    handle: Callable[[RunPayload], None],
+    *,
+    engine: Engine = "pool",
+    jobs: int | None = None,
+    address: str | None = None,
+) -> None:
+    """Execute every spec on ``engine`` and call ``handle`` in this process as each finishes.
+
+    Parameters
+    ----------
+    specs
+        The runs, in the order they are submitted.
+    handle
+        Called with each run's payload, in completion order.
+    engine
+        ``"pool"`` or ``"ray"``.
+    jobs
+        Parallel runs (default: one per CPU core; a Ray cluster decides itself).
+    address
+        Ray cluster address (``ray`` only); default: start a local Ray instance.
+
+    Raises
+    ------
+    ValueError
+        If ``engine``, ``jobs`` or ``address`` is invalid, or Ray is not installed.
+    KeyboardInterrupt
+        After stopping the workers, if interrupted.
+    """
+    if engine not in ENGINES:
+        raise ValueError(f"engine must be one of {list(ENGINES)}, got {engine!r}")
+    if jobs is not None and jobs < 1:
+        raise ValueError(f"jobs must be >= 1, got {jobs}")
+    if address is not None and engine != "ray":
+        raise ValueError("address is only used by the ray engine")
+    if not specs:
+        return
+    workers = min(jobs or os.cpu_count() or 1, len(specs))
+    if engine == "ray":
+        _dispatch_ray(specs, handle, jobs=jobs, address=address)
+    elif workers == 1:
+        for spec in specs:
+            handle(execute_run(spec))
+    else:
+        warm_up_solvers(specs)
+        _dispatch_pool(specs, handle, workers)
+
+
+def _set_up_worker(log_level: int) -> None:
+    """Make a worker process behave like one core of this campaign."""
+    # One BLAS thread per worker: OpenBLAS starts one per core in every process, and `jobs`
+    # workers each spinning `cores` threads over-subscribe the machine (a 10-run pop-up
+    # campaign, 2 jobs on 2 cores: 27–29 s with them, 12–23 s without).
+    threadpool_limits(limits=1, user_api="blas")
+    logging.getLogger("mufusion").setLevel(log_level)
+
+
+def _pool_worker(log_level: int) -> None:
+    # The parent decides what Ctrl-C means: it stops the workers itself.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _set_up_worker(log_level)
+
+
+def _ray_task(spec: RunSpec, log_level: int) -> RunPayload:
+    _set_up_worker(log_level)
+    return execute_run(spec)
+
+
+def _parent_log_level() -> int:
+    return logging.getLogger("mufusion").getEffectiveLevel()
+
+
+def _dispatch_pool(
+    specs: Sequence[RunSpec], handle: Callable[[RunPayload], None], workers: int
+) -> None:
+    pool = ProcessPoolExecutor(
+        max_workers=workers, initializer=_pool_worker, initargs=(_parent_log_level(),)
+    )
+    try:
+        futures: dict[Future[RunPayload], RunSpec] = {
+            pool.submit(execute_run, spec): spec for spec in specs
+        }
+        for fut in as_completed(futures):
+            try:
+                payload = fut.result()
+            except BrokenProcessPool as exc:  # a worker died (e.g. killed by the OS)
+                payload = RunPayload(futures[fut], None, {}, f"BrokenProcessPool: {exc}")
+            handle(payload)
+    except BaseException:
+        _stop_pool(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Cancel queued runs and terminate running workers."""
+    # Python < 3.14 has no public call to stop running tasks (3.14: terminate_workers()).
+    processes = list((pool._processes or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(timeout=10.0)
+
+
+def _dispatch_ray(
+    specs: Sequence[RunSpec],
+    handle: Callable[[RunPayload], None],
+    *,
+    jobs: int | None,
+    address: str | None,
+) -> None:
+    try:
+        import ray
+    except ImportError:
+        raise ValueError(
+            "the ray engine needs Ray: pip install 'mufusion[scale]' (install.sh does)"
+        ) from None
+    started = not ray.is_initialized()
+    if started:
+        if address is None:
+            warm_up_solvers(specs)  # the local workers share this machine's solver cache
+        try:
+            ray.init(
+                address=address,
+                num_cpus=None if address else (jobs or os.cpu_count() or 1),
+                include_dashboard=False,
+                logging_level=logging.WARNING,
+            )
+        except (ConnectionError, RuntimeError, ValueError) as err:
+            raise ValueError(f"cannot start or reach Ray (address={address!r}): {err}") from None
+    task = ray.remote(num_cpus=1, max_retries=0)(_ray_task)
+    level = _parent_log_level()
+    pending = {task.remote(spec, level): spec for spec in specs}
+    try:
+        while pending:
+            done, _ = ray.wait(list(pending), num_returns=1)
+            for ref in done:
+                spec = pending.pop(ref)
+                try:
+                    payload = ray.get(ref)
+                except ray.exceptions.RayError as exc:  # the worker died or was lost
+                    payload = RunPayload(spec, None, {}, f"{type(exc).__name__}: {exc}")
+                handle(payload)
+    except BaseException:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        raise
+    finally:
+        if started:
+            ray.shutdown()

@@ -1,0 +1,153 @@
+"""The campaign file: scenarios × configurations × a parameter grid × seeds, as validated TOML.
+
+Everything that would make two runs of one campaign the same run (a scenario, configuration or
+grid value listed twice, a grid key also fixed by ``overrides``) is rejected when the file is
+read, before anything runs, with a message naming the key and the value.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from mufusion.configurations import CONFIGURATION_NAMES
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+GridValue = bool | int | float | str
+"""A value of one grid axis, as TOML gives it."""
+
+MAX_SEEDS = 100_000
+
+
+class CampaignFile(BaseModel):
+    """A campaign as a TOML file.
+
+    Example::
+
+        name = "friction sweep"
+        scenarios = ["popup"]
+        configs = ["GT", "P", "F", "F-safe"]
+        overrides = ["duration_s=4"]          # applied to every run
+        seeds = 20                            # optional: every variant with 20 seeds
+        [grid]                                # every combination becomes one variant
+        "friction.mu" = [0.7, 0.8, 0.9, 1.0]
+        "obstacle.distance_m" = [18.0, 22.0]
+
+    With ``seeds = N`` every variant runs with the scenario's ``seed`` field set to
+    ``s0, s0 + 1, …, s0 + N − 1``, ``s0`` being the seed the scenario (after ``overrides`` and the
+    grid point) declares; the seed drives the ``random`` error models of the estimators.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    name: str = "campaign"
+    scenarios: list[str] = Field(min_length=1)
+    configs: list[str] = Field(default_factory=lambda: list(CONFIGURATION_NAMES), min_length=1)
+    overrides: list[str] = Field(default_factory=list)
+    grid: dict[str, list[GridValue]] = Field(default_factory=dict)
+    seeds: Annotated[int, Field(ge=1, le=MAX_SEEDS)] | None = None
+
+    @field_validator("scenarios")
+    @classmethod
+    def _distinct_scenarios(cls, v: list[str]) -> list[str]:
+        _reject_repeats("scenarios", v)
+        return v
+
+    @field_validator("configs")
+    @classmethod
+    def _known_configs(cls, v: list[str]) -> list[str]:
+        unknown = [c for c in v if c not in CONFIGURATION_NAMES]
+        if unknown:
+            raise ValueError(f"unknown configs {unknown}; allowed: {list(CONFIGURATION_NAMES)}")
+        _reject_repeats("configs", v)
+        return v
+
+    @field_validator("overrides")
+    @classmethod
+    def _distinct_override_keys(cls, v: list[str]) -> list[str]:
+        _reject_repeats("overrides keys", [_key_of(item) for item in v])
+        return v
+
+    @field_validator("grid")
+    @classmethod
+    def _distinct_grid_values(cls, v: dict[str, list[GridValue]]) -> dict[str, list[GridValue]]:
+        empty = [k for k, values in v.items() if not values]
+        if empty:
+            raise ValueError(f"grid axes {empty} have no values")
+        _reject_repeats("grid keys", [k.strip() for k in v])
+        for key, values in v.items():
+            # bool is an int in Python; keep True apart from 1 (they are different TOML values).
+            seen: set[tuple[bool, GridValue]] = set()
+            for value in values:
+                tag = (isinstance(value, bool), value)
+                if tag in seen:
+                    raise ValueError(f"grid {key!r}: value {value!r} is listed more than once")
+                seen.add(tag)
+        return v
+
+    @model_validator(mode="after")
+    def _grid_keys_not_fixed_elsewhere(self) -> CampaignFile:
+        fixed = {_key_of(item) for item in self.overrides}
+        for key in self.grid:
+            if key.strip() in fixed:
+                raise ValueError(
+                    f"grid key {key!r} is also set in overrides; keep it in one place"
+                )
+            if key.strip() == "seed" and self.seeds is not None:
+                raise ValueError("grid key 'seed' and seeds = N both set the seed; use one")
+        return self
+
+
+def _key_of(override: str) -> str:
+    return override.partition("=")[0].strip()
+
+
+def _reject_repeats(what: str, values: list[str]) -> None:
+    seen: set[str] = set()
+    for value in values:
+        if value in seen:
+            raise ValueError(f"{what}: {value!r} is listed more than once")
+        seen.add(value)
+
+
+def load_campaign(path: str | Path) -> CampaignFile:
+    """Read and validate a campaign file.
+
+    Parameters
+    ----------
+    path
+        TOML file with the fields of :class:`CampaignFile`.
+
+    Returns
+    -------
+    CampaignFile
+        The validated campaign.
+
+    Raises
+    ------
+    ValueError
+        If the file is missing, not TOML, or a field is invalid or repeats a value (the message
+        names the field and the value).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"campaign file {str(path)!r} does not exist")
+    try:
+        raw = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise ValueError(f"campaign file {str(path)!r} is not valid TOML: {err}") from None
+    try:
+        return CampaignFile.model_validate(raw)
+    except ValidationError as err:
+        problems = "; ".join(
+            f"{'.'.join(str(p) for p in e['loc']) or '(top level)'}: {e['msg']}"
+            for e in err.errors()
+        )
+        raise ValueError(f"invalid campaign {str(path)!r}: {problems}") from None

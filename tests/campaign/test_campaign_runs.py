@@ -1,0 +1,107 @@
+"""Running campaigns from the library: atomic run directories, Ctrl-C in the parent stops the
+pool's workers and cancels the queue, a real SIGINT to `mufusion campaign`, run_campaign."""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+import mufusion.campaign.engines as engines
+from mufusion.campaign import (
+    CampaignInterrupted,
+    RunSpec,
+    execute_campaign,
+    run_campaign,
+)
+from mufusion.campaign.storage import publish_run, read_result
+
+SHORT = ("duration_s=1.0",)
+
+
+def _specs(n: int) -> list[RunSpec]:
+    return [RunSpec("popup", "GT", f"seed {i}", overrides=SHORT, seed=i, index=i)
+            for i in range(n)]
+
+
+def test_publish_run_is_all_or_nothing(tmp_path):
+    target = tmp_path / "runs" / "0000-x"
+    with pytest.raises(FileNotFoundError):  # a file in a missing subdirectory: write fails
+        publish_run(target, {"a.csv": b"1", "sub/b.csv": b"2"}, {"metrics": {}})
+    assert not target.exists() and list((tmp_path / "runs").iterdir()) == []
+    publish_run(target, {"a.csv": b"old", "stale.csv": b"x"}, {"n": 1})
+    publish_run(target, {"a.csv": b"new"}, {"n": 2})  # replaces the earlier run whole
+    assert sorted(p.name for p in target.iterdir()) == ["a.csv", "result.json"]
+    assert (target / "a.csv").read_bytes() == b"new" and read_result(target) == {"n": 2}
+    assert list((tmp_path / "runs").iterdir()) == [target]
+
+
+def test_ctrl_c_in_the_parent_stops_the_pool_and_cancels_queued_runs(tmp_path):
+    runs_dir = tmp_path / "runs"
+    done: list[RunSpec] = []
+
+    def interrupt_after_first(spec: RunSpec) -> None:
+        done.append(spec)
+        raise KeyboardInterrupt
+
+    started = time.perf_counter()
+    with pytest.raises(CampaignInterrupted) as stop:
+        execute_campaign(_specs(8), runs_dir, jobs=2, on_done=interrupt_after_first)
+    assert time.perf_counter() - started < 60.0
+    assert len(done) == 1 and len(stop.value.finished) == 1 and len(stop.value.pending) == 7
+    assert [p.name for p in runs_dir.iterdir()] == [done[0].name]
+    assert multiprocessing.active_children() == []  # the workers are gone
+    time.sleep(2.0)  # and nothing queued starts later
+    assert [p.name for p in runs_dir.iterdir()] == [done[0].name]
+
+
+def test_run_campaign_returns_triples_and_raises_naming_failed_runs(tmp_path, monkeypatch):
+    specs = [RunSpec("popup", "GT", overrides=SHORT), RunSpec("popup", "F", overrides=SHORT)]
+    results = run_campaign(specs, tmp_path / "a", jobs=1)
+    assert [(s.config, d.name) for s, _m, d in results] == [
+        ("GT", "0000-popup-default-GT"), ("F", "0001-popup-default-F")]
+    assert results[1][1].utilization_vs_gt is not None
+
+    def broken(cfg, configuration, **kw):
+        raise RuntimeError("no solver")
+
+    monkeypatch.setattr(engines, "run_scenario", broken)
+    with pytest.raises(RuntimeError, match=r"2 of 2 runs failed: 0000-popup-default-GT: "
+                                           r"RuntimeError: no solver"):
+        run_campaign(specs, tmp_path / "b", jobs=1)
+    with pytest.raises(ValueError, match="listed more than once"):
+        run_campaign([specs[0], specs[0]], tmp_path / "c", jobs=1)
+
+
+@pytest.mark.slow
+def test_sigint_to_the_command_stops_it_with_a_partial_summary(tmp_path):
+    file = tmp_path / "c.toml"
+    file.write_text('scenarios = ["popup"]\nconfigs = ["GT", "F"]\nseeds = 10\n'
+                    'overrides = ["duration_s=1.5", "estimation.local_error=random"]\n')
+    out = tmp_path / "out"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    cmd = [sys.executable, "-m", "mufusion", "campaign", str(file), "--out", str(out),
+           "--jobs", "2"]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True)
+    deadline = time.monotonic() + 120.0
+    while time.monotonic() < deadline and proc.poll() is None:
+        if (out / "runs").is_dir() and any(not p.name.startswith(".") for p in
+                                           (out / "runs").iterdir()):
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    output, _ = proc.communicate(timeout=60)
+    assert proc.returncode == 130, output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["partial"] is True and 1 <= summary["completed"] < 20
+    assert summary["completed"] + summary["pending"] == 20
+    assert "--resume" in output
+    names = sorted(p.name for p in (out / "runs").iterdir())
+    assert names == sorted(r["run"] for r in summary["runs"])  # no half-written directory
