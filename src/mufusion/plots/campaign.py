@@ -12,7 +12,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 
 from mufusion.campaign.report import CampaignResults
 from mufusion.campaign.stats import (
@@ -98,6 +100,7 @@ def plot_distributions(table: pd.DataFrame, metrics: Sequence[str], path: Path) 
 def plot_heat_map(
     cells: pd.DataFrame, x: str, y: str | None, value: str, path: Path, *,
     title: str, vmin: float | None = None, vmax: float | None = None, percent: bool = False,
+    feasibility: dict[tuple[object, object], str] | None = None,
 ) -> Path:
     """Heat maps of ``value`` over grid keys ``x`` and ``y``: one panel per configuration.
 
@@ -112,6 +115,10 @@ def plot_heat_map(
         Column shown as colour and written in each cell.
     percent
         Show values ×100 with a ``%``.
+    feasibility
+        The physics oracle's class per ``(x, y)`` cell (``feasible``, ``marginal``,
+        ``infeasible``; ``mixed`` where pooled variants differ): infeasible cells are hatched and
+        the boundary of the feasible region is drawn as a thick white line.
     """
     panels = _groups(cells)
     xs = sorted(cells[x].unique(), key=_sort_key)
@@ -145,6 +152,8 @@ def plot_heat_map(
                     text = f"{100 * v:.0f}%" if percent else f"{v:.3g}"
                     shade = "white" if (v - lo) / (hi - lo) < 0.6 else "black"
                     ax.text(j, i, text, ha="center", va="center", fontsize=8, color=shade)
+        if feasibility:
+            _draw_feasibility(ax, feasibility, xs, ys)
         ax.set_xticks(range(len(xs)), [str(v) for v in xs], fontsize=8)
         ax.set_yticks(range(len(ys)), [str(v) for v in ys] if y else [""], fontsize=8)
         ax.set_xlabel(x, fontsize=8)
@@ -159,6 +168,50 @@ def plot_heat_map(
             bar.ax.yaxis.set_major_formatter(lambda v, _pos: f"{100 * v:.0f}%")
     fig.suptitle(title, fontsize=10)
     return _save(fig, path)
+
+
+def _draw_feasibility(
+    ax: Axes, classes: dict[tuple[object, object], str], xs: list, ys: list
+) -> None:
+    """Hatch infeasible cells; outline the feasible region (edges where feasibility changes)."""
+    def feasible(i: int, j: int) -> bool | None:
+        if not (0 <= i < len(ys) and 0 <= j < len(xs)):
+            return None
+        return classes.get((xs[j], ys[i])) == "feasible"
+
+    for i in range(len(ys)):
+        for j in range(len(xs)):
+            cls = classes.get((xs[j], ys[i]))
+            if cls in ("infeasible", "marginal", "mixed"):
+                ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, lw=0,
+                                       hatch="///" if cls == "infeasible" else "..",
+                                       edgecolor="0.85", gid=f"feasibility-{cls}"))
+            here = feasible(i, j)
+            for di, dj in ((0, 1), (1, 0)):
+                there = feasible(i + di, j + dj)
+                if there is None or there == here:
+                    continue
+                if dj:
+                    ax.plot([j + 0.5, j + 0.5], [i - 0.5, i + 0.5], color="white", lw=2.5,
+                            gid="feasibility-boundary")
+                else:
+                    ax.plot([j - 0.5, j + 0.5], [i + 0.5, i + 0.5], color="white", lw=2.5,
+                            gid="feasibility-boundary")
+
+
+def feasibility_cells(table: pd.DataFrame, x: str, y: str | None) -> dict[tuple[object, object],
+                                                                            str]:
+    """The oracle's class per ``(x, y)`` grid cell, pooled over the other grid keys."""
+    if "feasibility" not in table.columns:
+        return {}
+    cells: dict[tuple[object, object], str] = {}
+    keys = [x, *([y] if y else [])]
+    for key, group in table.groupby(keys, dropna=False):
+        values = set(group["feasibility"].dropna().astype(str))
+        cell = key if isinstance(key, tuple) else (key,)
+        cls = values.pop() if len(values) == 1 else "mixed"
+        cells[(cell[0], cell[1] if y else None)] = cls
+    return cells
 
 
 def _sort_key(v: object) -> tuple[int, float, str]:
@@ -186,11 +239,13 @@ def campaign_figures(data: CampaignResults, out_dir: Path) -> dict[str, Path]:
     by = ["scenario", "config", x, *([y] if y else [])]
     pooled = f" (pooled over {', '.join(data.grid[2:])})" if len(data.grid) > 2 else ""
     rates = outcome_rates(table, by=by)
+    classes = feasibility_cells(table, x, y)
     for column, label in outcome_columns(table):
         cells = rates[rates["outcome"] == label]
         figures[f"heatmap/{column}"] = plot_heat_map(
             cells, x, y, "rate", out_dir / f"heatmap-{column}.png",
             title=f"{label} rate{pooled}", vmin=0.0, vmax=1.0, percent=True,
+            feasibility=classes,
         )
     graded = graded_summary(table, by=by, grid=data.grid)
     for metric in metrics:
@@ -199,6 +254,6 @@ def campaign_figures(data: CampaignResults, out_dir: Path) -> dict[str, Path]:
             continue
         figures[f"heatmap/{metric}"] = plot_heat_map(
             cells, x, y, "mean", out_dir / f"heatmap-{metric}.png",
-            title=f"mean {metric}{pooled}",
+            title=f"mean {metric}{pooled}", feasibility=classes,
         )
     return figures
