@@ -14,6 +14,9 @@ from typer.testing import CliRunner
 
 from mufusion.cli import app
 
+# Closed-loop runs of several seconds each: outside the fast subset (pytest -m 'not slow').
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def reproduction(tmp_path_factory):

@@ -14,6 +14,9 @@ from mufusion.metrics import compute_metrics
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
 
+# Closed-loop runs of several seconds each: outside the fast subset (pytest -m 'not slow').
+pytestmark = pytest.mark.slow
+
 
 def test_same_scenario_and_seed_give_an_identical_log():
     cfg = load_scenario("popup", ["duration_s=1.0", "estimation.local_error=random",

@@ -19,6 +19,9 @@ from mufusion.sim.world import World
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.plant import Plant, initial_state
 
+# Closed-loop runs of several seconds each: outside the fast subset (pytest -m 'not slow').
+pytestmark = pytest.mark.slow
+
 
 def _popup(*faults: str, duration_s: float = 2.5, config: str = "F", extra=()):
     overrides = [f"duration_s={duration_s}", *extra]
