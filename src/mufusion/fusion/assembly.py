@@ -9,11 +9,18 @@ Paper Sec. III, "we combine friction estimates ... into two input data vectors":
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from mufusion.fusion.gp import MODES, FusionMode
+from mufusion.fusion.data import (
+    MARGIN_RANGE,
+    MU_RANGE,
+    POSITION_RANGE_M,
+    FusionData,
+    FusionMode,
+    check_mode,
+    check_range,
+)
 
 GRID_STEP_M = 1.0
 """Spacing ds of the fusion grid [m] (paper: s ∈ {0, ds, …, s_f}; the authors' code used ≈ 2 m)."""
@@ -37,54 +44,6 @@ LOCAL_MARGIN = 0.025
 
 LOCAL_GROUP = 0
 """Group label of the local estimate's points; class segments are labelled 1, 2, …"""
-
-
-@dataclass(frozen=True)
-class FusionData:
-    """Fusion input data, sorted by position.
-
-    Attributes
-    ----------
-    s_m
-        Data positions ahead of the vehicle [m], shape ``(n,)``.
-    mu
-        Friction values [-], shape ``(n,)``.
-    margin
-        95 % half-widths [-], shape ``(n,)``.
-    groups
-        Integer labels, shape ``(n,)``: points with one label are copies of one estimate and share
-        its error (``LOCAL_GROUP`` for the local estimate, ``1, 2, …`` for class segments).
-
-    Raises
-    ------
-    ValueError
-        If the arrays differ in length, are not finite, or a margin is negative.
-    """
-
-    s_m: np.ndarray
-    mu: np.ndarray
-    margin: np.ndarray
-    groups: np.ndarray
-
-    def __post_init__(self) -> None:
-        arrays = {}
-        for name in ("s_m", "mu", "margin"):
-            arr = np.asarray(getattr(self, name), dtype=float).reshape(-1)
-            if not np.isfinite(arr).all():
-                raise ValueError(f"FusionData.{name} must be finite")
-            arrays[name] = arr
-        grp = np.asarray(self.groups).reshape(-1).astype(np.int64)
-        n = arrays["s_m"].size
-        if arrays["mu"].size != n or arrays["margin"].size != n or grp.size != n:
-            raise ValueError(
-                "FusionData.s_m, mu, margin and groups must have equal lengths, got "
-                f"{n}, {arrays['mu'].size}, {arrays['margin'].size} and {grp.size}"
-            )
-        if (arrays["margin"] < 0.0).any():
-            raise ValueError("FusionData.margin must be >= 0")
-        for name, arr in (*arrays.items(), ("groups", grp)):
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
 
 
 def _runs(values: np.ndarray, margins: np.ndarray, valid: np.ndarray) -> np.ndarray:
@@ -141,9 +100,10 @@ def assemble_inputs(
     Raises
     ------
     ValueError
-        If the grid is not 1-D, finite and strictly increasing, lengths differ, a margin is
-        negative or NaN where the class value is given, ``local_mu`` or ``local_margin`` is not
-        finite (or the margin < 0), ``s_local_m`` is not finite, or ``mode`` is unknown.
+        If the grid is not 1-D, within ``POSITION_RANGE_M`` and strictly increasing, lengths
+        differ, a class value (where given) or ``local_mu`` is outside ``MU_RANGE`` = [0, 2], a
+        margin (where the class value is given) or ``local_margin`` is outside ``MARGIN_RANGE``
+        = [0, 1] or NaN, ``s_local_m`` is not finite, or ``mode`` is unknown.
 
     Examples
     --------
@@ -152,11 +112,11 @@ def assemble_inputs(
     >>> d.mu.tolist(), d.groups.tolist()
     ([0.42, 0.42, 0.8], [0, 0, 2])
     """
-    if mode not in MODES:
-        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
+    check_mode(mode)
     grid = np.asarray(s_grid_m, dtype=float)
-    if grid.ndim != 1 or grid.size == 0 or not np.isfinite(grid).all():
-        raise ValueError("s_grid_m must be a non-empty, finite, one-dimensional array")
+    if grid.ndim != 1 or grid.size == 0:
+        raise ValueError("s_grid_m must be a non-empty, one-dimensional array")
+    check_range("s_grid_m", grid, POSITION_RANGE_M, " m")
     if (np.diff(grid) <= 0.0).any():
         raise ValueError("s_grid_m must be strictly increasing")
     pmu = np.asarray(predictive_mu, dtype=float)
@@ -168,14 +128,14 @@ def assemble_inputs(
     if np.isinf(pmu).any():
         raise ValueError("predictive_mu must be finite or NaN (no data), got inf")
     valid = ~np.isnan(pmu)
-    if not np.isfinite(pmar[valid]).all() or (pmar[valid] < 0.0).any():
-        raise ValueError("predictive_margin must be finite and >= 0 where predictive_mu is given")
+    if valid.any():
+        check_range("predictive_mu", pmu[valid], MU_RANGE)
+        check_range("predictive_margin where predictive_mu is given", pmar[valid], MARGIN_RANGE)
     if not math.isfinite(float(s_local_m)):
         raise ValueError(f"s_local_m must be finite, got {s_local_m!r}")
-    if local_mu is not None and not math.isfinite(float(local_mu)):
-        raise ValueError(f"local_mu must be finite or None, got {local_mu!r}")
-    if not (math.isfinite(float(local_margin)) and float(local_margin) >= 0.0):
-        raise ValueError(f"local_margin must be finite and >= 0, got {local_margin!r}")
+    if local_mu is not None:
+        check_range("local_mu", np.array([float(local_mu)]), MU_RANGE)
+    check_range("local_margin", np.array([float(local_margin)]), MARGIN_RANGE)
 
     run = _runs(pmu, pmar, valid)
     use_local = np.zeros(grid.size, dtype=bool)
@@ -194,4 +154,5 @@ def assemble_inputs(
         [np.full(n_local, LOCAL_GROUP, dtype=np.int64), run[keep_pred] + LOCAL_GROUP + 1]
     )
     order = np.argsort(s, kind="stable")
-    return FusionData(s[order], mu[order], margin[order], groups[order])
+    # Every value was range-checked above: the data are built without a second check.
+    return FusionData._trusted(s[order], mu[order], margin[order], groups[order])
