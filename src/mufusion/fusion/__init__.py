@@ -9,7 +9,7 @@ See ``docs/fusion.md``. Modules, upstream first:
   ranges, the noise floor and the checks at the boundary;
 * :mod:`~mufusion.fusion.engine`: ``PosteriorEngine``, the linear algebra and its caches;
 * :mod:`~mufusion.fusion.safe`: safe mode (grouped noise, hard-bound envelope);
-* :mod:`~mufusion.fusion.assembly`: ``assemble_inputs`` and the grid;
+* :mod:`~mufusion.fusion.assembly`: ``assemble_inputs`` (and its batch form) and the grid;
 * :mod:`~mufusion.fusion.core`: ``fuse``, ``GPFusion``; :mod:`~mufusion.fusion.batch`:
   ``fuse_batch``.
 """
@@ -21,7 +21,9 @@ from mufusion.fusion.assembly import (
     HORIZON_M,
     LOCAL_GROUP,
     LOCAL_MARGIN,
+    FusionDataBatch,
     assemble_inputs,
+    assemble_inputs_batch,
 )
 from mufusion.fusion.batch import fuse_batch
 from mufusion.fusion.core import GPFusion, fuse
@@ -68,11 +70,13 @@ __all__ = [
     "Z95",
     "FusedEstimate",
     "FusionData",
+    "FusionDataBatch",
     "FusionMode",
     "GPFusion",
     "GPPrior",
     "PosteriorEngine",
     "assemble_inputs",
+    "assemble_inputs_batch",
     "fuse",
     "fuse_batch",
 ]

@@ -9,6 +9,7 @@ Paper Sec. III, "we combine friction estimates ... into two input data vectors":
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -46,17 +47,106 @@ LOCAL_GROUP = 0
 """Group label of the local estimate's points; class segments are labelled 1, 2, …"""
 
 
+@dataclass(frozen=True)
+class FusionDataBatch:
+    """Fusion input data of ``B`` horizons on one grid, in the form :func:`fuse_batch` takes.
+
+    Attributes
+    ----------
+    s_m
+        Grid positions [m], shape ``(n,)``, shared by all horizons.
+    mu
+        Friction values [-], shape ``(B, n)``; NaN where a horizon has no datum at that point.
+    margin
+        95 % half-widths [-], shape ``(B, n)``; NaN where ``mu`` is NaN.
+    groups
+        Integer labels, shape ``(B, n)`` (as :class:`FusionData`; meaningless where ``mu`` is
+        NaN).
+    """
+
+    s_m: np.ndarray
+    mu: np.ndarray
+    margin: np.ndarray
+    groups: np.ndarray
+
+
 def _runs(values: np.ndarray, margins: np.ndarray, valid: np.ndarray) -> np.ndarray:
-    """Run index per grid point: a new run starts wherever (value, margin) changes or data stop."""
-    start = np.ones(values.size, dtype=bool)
+    """Run index per grid point (last axis): a new run starts wherever (value, margin) changes or
+    data stop."""
+    start = np.ones(values.shape, dtype=bool)
     same = (
-        valid[1:]
-        & valid[:-1]
-        & (values[1:] == values[:-1])
-        & (margins[1:] == margins[:-1])
+        valid[..., 1:]
+        & valid[..., :-1]
+        & (values[..., 1:] == values[..., :-1])
+        & (margins[..., 1:] == margins[..., :-1])
     )
-    start[1:] = ~same
-    return np.cumsum(start) - 1
+    start[..., 1:] = ~same
+    return np.cumsum(start, axis=-1) - 1
+
+
+def _check_inputs(
+    s_grid_m: object,
+    predictive_mu: object,
+    predictive_margin: object,
+    local_mu: np.ndarray,
+    local_margin: float,
+    s_local_m: float,
+    mode: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The checks of :func:`assemble_inputs` (``predictive_*`` of shape ``(n,)`` or ``(B, n)``,
+    ``local_mu`` with NaN where unavailable); returns the grid and the predictive arrays."""
+    check_mode(mode)
+    grid = np.asarray(s_grid_m, dtype=float)
+    if grid.ndim != 1 or grid.size == 0:
+        raise ValueError("s_grid_m must be a non-empty, one-dimensional array")
+    check_range("s_grid_m", grid, POSITION_RANGE_M, " m")
+    if (np.diff(grid) <= 0.0).any():
+        raise ValueError("s_grid_m must be strictly increasing")
+    pmu = np.asarray(predictive_mu, dtype=float)
+    pmar = np.asarray(predictive_margin, dtype=float)
+    shape = local_mu.shape + grid.shape
+    if pmu.shape != shape:
+        raise ValueError(f"predictive_mu must have shape {shape}, got {pmu.shape}")
+    if pmar.shape != shape:
+        raise ValueError(f"predictive_margin must have shape {shape}, got {pmar.shape}")
+    if np.isinf(pmu).any():
+        raise ValueError("predictive_mu must be finite or NaN (no data), got inf")
+    valid = ~np.isnan(pmu)
+    if valid.any():
+        check_range("predictive_mu", pmu[valid], MU_RANGE)
+        check_range("predictive_margin where predictive_mu is given", pmar[valid], MARGIN_RANGE)
+    if not math.isfinite(float(s_local_m)):
+        raise ValueError(f"s_local_m must be finite, got {s_local_m!r}")
+    if np.isinf(local_mu).any():
+        raise ValueError("local_mu must be finite (or absent), got inf")
+    if not np.isnan(local_mu).all():
+        check_range("local_mu", local_mu[~np.isnan(local_mu)], MU_RANGE)
+    check_range("local_margin", np.array([float(local_margin)]), MARGIN_RANGE)
+    return grid, pmu, pmar
+
+
+def _assemble(
+    grid: np.ndarray,
+    pmu: np.ndarray,
+    pmar: np.ndarray,
+    local_mu: np.ndarray,
+    local_margin: float,
+    s_local_m: float,
+    mode: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Paper Sec. III on validated ``(B, n)`` arrays: μ, margin, groups per grid point (NaN where
+    there is no datum) and the mask of points with a datum."""
+    valid = ~np.isnan(pmu)
+    run = _runs(pmu, pmar, valid)
+    use_local = ~np.isnan(local_mu)[:, None] & (grid < float(s_local_m))[None, :]
+    if mode == "safe":
+        # Stop at the first change of class (or of coverage) ahead of the vehicle.
+        use_local &= run == run[:, :1]
+    keep_pred = valid & ~use_local
+    mu = np.where(use_local, local_mu[:, None], np.where(keep_pred, pmu, np.nan))
+    margin = np.where(use_local, float(local_margin), np.where(keep_pred, pmar, np.nan))
+    groups = np.where(use_local, LOCAL_GROUP, run + LOCAL_GROUP + 1).astype(np.int64)
+    return mu, margin, groups, use_local | keep_pred
 
 
 def assemble_inputs(
@@ -112,47 +202,65 @@ def assemble_inputs(
     >>> d.mu.tolist(), d.groups.tolist()
     ([0.42, 0.42, 0.8], [0, 0, 2])
     """
-    check_mode(mode)
-    grid = np.asarray(s_grid_m, dtype=float)
-    if grid.ndim != 1 or grid.size == 0:
-        raise ValueError("s_grid_m must be a non-empty, one-dimensional array")
-    check_range("s_grid_m", grid, POSITION_RANGE_M, " m")
-    if (np.diff(grid) <= 0.0).any():
-        raise ValueError("s_grid_m must be strictly increasing")
-    pmu = np.asarray(predictive_mu, dtype=float)
-    pmar = np.asarray(predictive_margin, dtype=float)
-    if pmu.shape != grid.shape:
-        raise ValueError(f"predictive_mu must have shape {grid.shape}, got {pmu.shape}")
-    if pmar.shape != grid.shape:
-        raise ValueError(f"predictive_margin must have shape {grid.shape}, got {pmar.shape}")
-    if np.isinf(pmu).any():
-        raise ValueError("predictive_mu must be finite or NaN (no data), got inf")
-    valid = ~np.isnan(pmu)
-    if valid.any():
-        check_range("predictive_mu", pmu[valid], MU_RANGE)
-        check_range("predictive_margin where predictive_mu is given", pmar[valid], MARGIN_RANGE)
-    if not math.isfinite(float(s_local_m)):
-        raise ValueError(f"s_local_m must be finite, got {s_local_m!r}")
-    if local_mu is not None:
-        check_range("local_mu", np.array([float(local_mu)]), MU_RANGE)
-    check_range("local_margin", np.array([float(local_margin)]), MARGIN_RANGE)
-
-    run = _runs(pmu, pmar, valid)
-    use_local = np.zeros(grid.size, dtype=bool)
-    if local_mu is not None:
-        use_local = grid < float(s_local_m)
-        if mode == "safe":
-            # Stop at the first change of class (or of coverage) ahead of the vehicle.
-            use_local &= run == run[0]
-    keep_pred = valid & ~use_local
-
-    n_local = int(use_local.sum())
-    s = np.concatenate([grid[use_local], grid[keep_pred]])
-    mu = np.concatenate([np.full(n_local, float(local_mu or 0.0)), pmu[keep_pred]])
-    margin = np.concatenate([np.full(n_local, float(local_margin)), pmar[keep_pred]])
-    groups = np.concatenate(
-        [np.full(n_local, LOCAL_GROUP, dtype=np.int64), run[keep_pred] + LOCAL_GROUP + 1]
+    if local_mu is not None and not math.isfinite(float(local_mu)):
+        raise ValueError(f"local_mu must be finite or None, got {local_mu!r}")
+    local = np.array(np.nan if local_mu is None else float(local_mu))
+    grid, pmu, pmar = _check_inputs(
+        s_grid_m, predictive_mu, predictive_margin, local, local_margin, s_local_m, mode
     )
-    order = np.argsort(s, kind="stable")
+    mu, margin, groups, present = _assemble(
+        grid, pmu[None, :], pmar[None, :], local.reshape(1), local_margin, s_local_m, mode
+    )
+    p = present[0]
     # Every value was range-checked above: the data are built without a second check.
-    return FusionData._trusted(s[order], mu[order], margin[order], groups[order])
+    return FusionData._trusted(grid[p], mu[0, p], margin[0, p], groups[0, p])
+
+
+def assemble_inputs_batch(
+    s_grid_m: np.ndarray,
+    predictive_mu: np.ndarray,
+    predictive_margin: np.ndarray,
+    *,
+    local_mu: np.ndarray,
+    local_margin: float = LOCAL_MARGIN,
+    s_local_m: float = DEFAULT_S_LOCAL_M,
+    mode: FusionMode = "paper",
+) -> FusionDataBatch:
+    """:func:`assemble_inputs` for ``B`` horizons on one grid, vectorized.
+
+    Parameters
+    ----------
+    s_grid_m
+        As :func:`assemble_inputs`, shape ``(n,)``.
+    predictive_mu, predictive_margin
+        As :func:`assemble_inputs`, shape ``(B, n)``.
+    local_mu
+        Local estimate per horizon [-], shape ``(B,)``; NaN where it is unavailable.
+    local_margin, s_local_m, mode
+        As :func:`assemble_inputs`.
+
+    Returns
+    -------
+    FusionDataBatch
+        Row ``b``'s present points (``mu`` not NaN) are exactly ``assemble_inputs`` on row ``b``.
+
+    Raises
+    ------
+    ValueError
+        As :func:`assemble_inputs`, plus ``local_mu`` not of shape ``(B,)``.
+
+    Examples
+    --------
+    >>> d = assemble_inputs_batch([0.0, 1.0], [[0.5, 0.8], [0.5, 0.8]], [[0.1, 0.2]] * 2,
+    ...                           local_mu=[0.45, np.nan], s_local_m=0.5)
+    >>> d.mu.tolist(), d.groups.tolist()
+    ([[0.45, 0.8], [0.5, 0.8]], [[0, 2], [1, 2]])
+    """
+    local = np.asarray(local_mu, dtype=float)
+    if local.ndim != 1:
+        raise ValueError(f"local_mu must have shape (B,), got {local.shape}")
+    grid, pmu, pmar = _check_inputs(
+        s_grid_m, predictive_mu, predictive_margin, local, local_margin, s_local_m, mode
+    )
+    mu, margin, groups, _ = _assemble(grid, pmu, pmar, local, local_margin, s_local_m, mode)
+    return FusionDataBatch(grid, mu, margin, groups)

@@ -7,6 +7,8 @@ one vectorized pass of the posterior engine).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mufusion.fusion.core import DEFAULT_ENGINE, fuse_validated
@@ -23,8 +25,14 @@ from mufusion.fusion.data import (
     check_range,
     clip_to_band,
 )
-from mufusion.fusion.engine import noise_sd_of
+from mufusion.fusion.engine import feature_noise_floor, noise_sd_of
 from mufusion.fusion.prior import Z95, GPPrior, check_prior
+from mufusion.fusion.safe import (
+    SAME_S_TOL_M,
+    SHARED_ERROR_FRACTION,
+    envelope_bound,
+    envelope_index,
+)
 
 
 def fuse_batch(
@@ -59,10 +67,11 @@ def fuse_batch(
     -------
     FusedEstimate
         ``s_m`` of shape ``(m,)``; ``mean``, ``std``, ``lower``, ``mu_hat`` of shape ``(B, m)``.
-        Row ``b`` equals ``fuse`` on row ``b``'s present points: bit for bit in safe mode or with
-        per-horizon positions (these run horizon by horizon); to rounding (≈ 1e-13 with the
-        estimators' margins) in paper mode on shared positions, which runs all horizons in one
-        vectorized pass.
+        Row ``b`` equals ``fuse`` on row ``b``'s present points: to rounding (≈ 1e-13 with the
+        estimators' margins) on shared positions, where paper mode runs all horizons in one
+        vectorized pass and safe mode the horizons with every point present (strictly
+        increasing positions, groups few enough for the feature path); bit for bit for the
+        other horizons, which run one by one.
 
     Raises
     ------
@@ -112,27 +121,90 @@ def fuse_batch(
     mu_max = np.where(present, y, 0.0).max(axis=1) if n else np.zeros(b)
     top = np.maximum(prior.upper, mu_max)
 
-    if mode == "paper" and np.ndim(s_m) == 1 and n > 0:
-        sd = noise_sd_of(np.where(present, m, 1.0))
-        precision = np.where(present, 1.0 / (sd * sd), 0.0)
-        resid = np.where(present, y - prior.mean, 0.0)
-        out = DEFAULT_ENGINE.latent_batch(prior, s[0], e, resid, precision)
-        if out is not None:
-            mean = prior.mean + out[0]
-            lower = mean - Z95 * out[1]
-            return FusedEstimate(e, mean, out[1], lower, clip_to_band(lower, top[:, None]))
-    # Safe mode or per-horizon positions: horizon by horizon through the validated core.
-    rows = []
-    for i in range(b):
+    out = [np.empty((b, e.size)) for _ in range(4)]  # mean, std, lower, mu_hat
+    todo = np.ones(b, dtype=bool)
+    if np.ndim(s_m) == 1 and n > 0:
+        vectorized = _paper_rows if mode == "paper" else _safe_rows
+        todo = vectorized(prior, s[0], e, y, m, grp, present, top, out)
+    # The rest (per-horizon positions, safe rows with absent points, many groups or tiny
+    # margins): horizon by horizon through the validated core, exactly as fuse.
+    for i in np.flatnonzero(todo):
         p = present[i]
         data = FusionData._trusted(
             s[i][p], y[i][p], m[i][p], None if grp is None else grp[i][p], read_only=False
         )
-        rows.append(fuse_validated(DEFAULT_ENGINE, prior, data, e, mode))
-    return FusedEstimate(
-        e,
-        np.stack([r.mean for r in rows]),
-        np.stack([r.std for r in rows]),
-        np.stack([r.lower for r in rows]),
-        np.stack([r.mu_hat for r in rows]),
-    )
+        row = fuse_validated(DEFAULT_ENGINE, prior, data, e, mode)
+        for arr, value in zip(out, (row.mean, row.std, row.lower, row.mu_hat), strict=True):
+            arr[i] = value
+    return FusedEstimate(e, *out)
+
+
+def _paper_rows(prior, s, e, y, m, grp, present, top, out) -> np.ndarray:
+    """Paper mode on shared positions, every horizon in one pass; returns the rows left to do."""
+    sd = noise_sd_of(np.where(present, m, 1.0))
+    resid = np.where(present, y - prior.mean, 0.0)
+    post = DEFAULT_ENGINE.latent_batch(prior, s, e, resid, np.where(present, 1.0 / (sd * sd), 0.0))
+    if post is None:
+        return np.ones(y.shape[0], dtype=bool)
+    mean, std, lower, mu_hat = out
+    mean[:] = prior.mean + post[0]
+    std[:] = post[1]
+    lower[:] = mean - Z95 * std
+    mu_hat[:] = clip_to_band(lower, top[:, None])
+    return np.zeros(y.shape[0], dtype=bool)
+
+
+def _safe_rows(prior, s, e, y, m, grp, present, top, out) -> np.ndarray:
+    """Safe mode on shared, strictly increasing positions for the horizons with every point
+    present and few enough groups for the feature path (see safe.safe_estimate, which this
+    vectorizes); returns the rows left to do."""
+    b, n = y.shape
+    todo = ~present.all(axis=1)
+    if todo.all() or not (np.diff(s) > SAME_S_TOL_M).all():
+        return np.ones(b, dtype=bool)
+    rows = np.flatnonzero(~todo)
+    yb, mb = y[rows], m[rows]
+    sd = noise_sd_of(mb)
+    resid = yb - prior.mean
+    paper = DEFAULT_ENGINE.latent_batch(prior, s, e, resid, 1.0 / (sd * sd))
+    if paper is None:
+        return np.ones(b, dtype=bool)
+    p_mean = prior.mean + paper[0]
+    p_lower = p_mean - Z95 * paper[1]
+    g_mean, g_std, g_lower = p_mean.copy(), paper[1].copy(), p_lower.copy()
+    if grp is not None:
+        # Dense labels 0, 1, … per row (np.unique row by row, vectorized).
+        order = np.argsort(grp[rows], axis=1, kind="stable")
+        ranked = np.take_along_axis(grp[rows], order, axis=1)
+        dense = np.zeros(ranked.shape, dtype=np.int64)
+        np.cumsum(ranked[:, 1:] != ranked[:, :-1], axis=1, out=dense[:, 1:])
+        label = np.empty_like(dense)
+        np.put_along_axis(label, order, dense, axis=1)
+        n_groups = dense[:, -1] + 1
+        indep = math.sqrt(1.0 - SHARED_ERROR_FRACTION) * sd
+        shared_rows = n_groups < n  # all groups of one point: the paper posterior (as fuse)
+        fast = (2 * n_groups <= n) & (indep.min(axis=1) >= feature_noise_floor(prior))
+        todo[rows[shared_rows & ~fast]] = True
+        sel = np.flatnonzero(shared_rows & fast)
+        if sel.size:
+            loadings = np.zeros((sel.size, n, int(n_groups[sel].max())))
+            rr, ii = np.meshgrid(np.arange(sel.size), np.arange(n), indexing="ij")
+            loadings[rr, ii, label[sel]] = math.sqrt(SHARED_ERROR_FRACTION) * sd[sel]
+            post = DEFAULT_ENGINE.latent_batch(
+                prior, s, e, resid[sel], 1.0 / (indep[sel] ** 2), loadings
+            )
+            if post is None:
+                todo[rows[sel]] = True
+            else:
+                g_mean[sel] = prior.mean + post[0]
+                g_std[sel] = post[1]
+                g_lower[sel] = g_mean[sel] - Z95 * post[1]
+    where = envelope_index(s, e)
+    mu_hat = np.minimum(p_lower, envelope_bound(yb - mb, where))
+    mu_hat = np.where(where[4], np.minimum(mu_hat, g_lower), mu_hat)
+    done = ~todo[rows]
+    for arr, value in zip(
+        out, (g_mean, g_std, g_lower, clip_to_band(mu_hat, top[rows, None])), strict=True
+    ):
+        arr[rows[done]] = value[done]
+    return todo

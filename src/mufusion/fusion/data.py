@@ -90,8 +90,9 @@ def clip_to_band(mu_hat: np.ndarray, top: float | np.ndarray) -> np.ndarray:
 
     0 from below: μ > 0 physically, so a negative lower bound carries no information and 0 is
     still a lower bound. ``top`` from above: a lower bound on μ above both the prior's band and
-    every datum comes from the squared-exponential GP overshooting between contradicting data
-    closer than ℓ (it rings); capping it only lowers μ̂ and is logged as a warning.
+    every datum comes from the squared-exponential GP overshooting where the data change faster
+    than ℓ allows (a sharp class change, or contradicting data closer than ℓ, where it rings);
+    capping it only lowers μ̂ and is logged as a warning.
     """
     if np.ndim(top) == 0:
         exceeded = bool(np.maximum.reduce(mu_hat, axis=None) > top)
@@ -99,8 +100,8 @@ def clip_to_band(mu_hat: np.ndarray, top: float | np.ndarray) -> np.ndarray:
         exceeded = bool((mu_hat > top).any())
     if exceeded:
         logger.warning(
-            "fused lower bound above the band top at %d point(s) (max %.4g): capped; the data "
-            "contradict each other closer than the kernel length scale",
+            "fused lower bound above the band top at %d point(s) (max %.4g): capped; the GP "
+            "overshoots where the data change faster than its length scale allows",
             int(np.count_nonzero(mu_hat > top)),
             float(np.max(mu_hat)),
         )
@@ -129,8 +130,13 @@ def check_range(
 
 
 def check_abs(name: str, arr: np.ndarray, bound: float, unit: str = "") -> None:
-    """ValueError naming ``name`` unless every element is finite and ``|x| <= bound`` (one
-    reduction: NaN propagates, inf fails the comparison)."""
+    """ValueError naming ``name`` unless every element is finite and ``|x| <= bound``.
+
+    Fast path for 1-D arrays: ``x · x <= bound²`` implies it (max |x| ≤ ‖x‖₂) and is one BLAS
+    call; NaN, inf and overflow all fail it, and only then is the exact check run.
+    """
+    if arr.ndim == 1 and arr.dot(arr) <= bound * bound:
+        return
     if not np.maximum.reduce(np.abs(arr), axis=None) <= bound:
         _range_error(name, arr, (-bound, bound), unit)
 
@@ -152,8 +158,8 @@ def check_positions(name: str, value: object) -> np.ndarray:
     if arr.size == 0:
         raise ValueError(f"{name} must not be empty")
     check_abs(name, arr, POSITION_RANGE_M[1], " m")
-    arr = arr.reshape(-1)  # a new view: marking it read-only leaves the caller's array alone
-    arr.flags.writeable = False
+    arr = arr.view()  # a new view: marking it read-only leaves the caller's array alone
+    arr.setflags(write=False)
     return arr
 
 
@@ -276,6 +282,6 @@ def _store(
 ) -> None:
     for name, arr in (("s_m", s), ("mu", y), ("margin", m), ("groups", grp)):
         if arr is not None and read_only:
-            arr = arr.reshape(-1)  # a new view: read-only without touching the caller's array
-            arr.flags.writeable = False
+            arr = arr.view()  # a new view: read-only without touching the caller's array
+            arr.setflags(write=False)
         object.__setattr__(obj, name, arr)

@@ -161,7 +161,7 @@ class PosteriorEngine:
         """
         k = 0 if shared is None else shared.shape[1]
         if 2 * k <= s.size:
-            floor = _FEATURE_MIN_SD_RATIO * prior.std
+            floor = feature_noise_floor(prior)
             # Independent noise is floored at NOISE_STD_FLOOR, which is ≥ floor for any allowed
             # prior: no reduction needed then.
             if (shared is None and NOISE_STD_FLOOR >= floor) or np.minimum.reduce(
@@ -185,27 +185,48 @@ class PosteriorEngine:
         e: np.ndarray,
         resid: np.ndarray,
         precision: np.ndarray,
+        shared: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray] | None:
         """The feature path for ``B`` horizons on shared positions ``s`` in one vectorized pass.
 
-        ``resid`` and ``precision`` (1 / noise variance, 0 for an absent point, which removes it
-        exactly) have shape ``(B, n)``. Returns mean offset and std of shape ``(B, m)``, or None
-        if the prior is not low rank on these positions.
+        ``resid`` and ``precision`` (1 / independent noise variance, 0 for an absent point, which
+        removes it exactly) have shape ``(B, n)``; optional ``shared`` loadings ``(B, n, G)`` add
+        one N(0, 1) error per column (an all-zero column decouples exactly). Returns mean offset
+        and std of shape ``(B, m)``, or None if the prior is not low rank on these positions.
         """
         feats = self.features(prior, s, e)
         if feats is None:
             return None
         phi_x, phi_e = feats.phi_x, feats.phi_e
         r = phi_x.shape[1]
-        # M_b = I + Φ_xᵀ diag(p_b) Φ_x for every horizon b; then as _posterior_features.
-        mats = np.einsum("nr,bn,ns->brs", phi_x, precision, phi_x, optimize=True)
-        mats[:, np.arange(r), np.arange(r)] += 1.0
+        # M_b = I + Ψ_bᵀ diag(p_b) Ψ_b with Ψ_b = [Φ_x, G_b]; then as _posterior_features.
+        top = np.einsum("nr,bn,ns->brs", phi_x, precision, phi_x, optimize=True)
         rhs = (precision * resid) @ phi_x
+        if shared is None:
+            mats = top
+        else:
+            g = shared.shape[2]
+            weighted = precision[:, :, None] * shared
+            cross = np.einsum("nr,bng->brg", phi_x, weighted, optimize=True)
+            mats = np.empty((resid.shape[0], r + g, r + g))
+            mats[:, :r, :r] = top
+            mats[:, :r, r:] = cross
+            mats[:, r:, :r] = cross.transpose(0, 2, 1)
+            mats[:, r:, r:] = np.einsum("bng,bnh->bgh", shared, weighted, optimize=True)
+            rhs = np.concatenate([rhs, np.einsum("bng,bn->bg", weighted, resid)], axis=1)
+        k = mats.shape[1]
+        mats[:, np.arange(k), np.arange(k)] += 1.0
         minv = np.linalg.inv(mats)
-        coef = np.einsum("brs,bs->br", minv, rhs)
+        coef = np.einsum("brs,bs->br", minv[:, :r, :], rhs)
         offset = coef @ phi_e.T
-        var = np.einsum("jr,brs,js->bj", phi_e, minv, phi_e, optimize=True) + feats.rest_e
+        var = np.einsum("jr,brs,js->bj", phi_e, minv[:, :r, :r], phi_e, optimize=True)
+        var += feats.rest_e
         return offset, np.sqrt(np.maximum(var, 0.0))
+
+
+def feature_noise_floor(prior: GPPrior) -> float:
+    """Smallest independent noise std [-] the feature path takes (smaller: the dense path)."""
+    return _FEATURE_MIN_SD_RATIO * prior.std
 
 
 def _eigen_features(prior: GPPrior, s: np.ndarray, e: np.ndarray) -> _Features | None:

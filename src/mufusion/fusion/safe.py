@@ -24,7 +24,8 @@ many close points (the squared-exponential ``K`` alone is numerically singular t
 a one-point group identical to the paper's independent noise.
 """
 
-_SAME_S_TOL_M = 1e-9  # two positions closer than this are the same point [m]
+SAME_S_TOL_M = 1e-9
+"""Two positions closer than this are the same point [m]."""
 
 
 def grouped_noise(
@@ -63,7 +64,7 @@ def hard_bound_envelope(
     bound (the caller also caps it there by the GP).
     """
     lo = y - margin
-    if (np.diff(s) > _SAME_S_TOL_M).all():
+    if (np.diff(s) > SAME_S_TOL_M).all():
         us, ub = s, lo  # already sorted, one estimate per position
         if us.size == s_eval.size and (us == s_eval).all():
             return ub, np.zeros(s_eval.size, dtype=bool)  # evaluated at the data positions
@@ -72,19 +73,36 @@ def hard_bound_envelope(
         s_sorted = s[order]
         lo_sorted = lo[order]
         first = np.ones(s_sorted.size, dtype=bool)
-        first[1:] = np.diff(s_sorted) > _SAME_S_TOL_M
+        first[1:] = np.diff(s_sorted) > SAME_S_TOL_M
         us = s_sorted[first]
         ub = lo_sorted[first]
+    where = envelope_index(us, s_eval)
+    return envelope_bound(ub, where), where[4]
+
+
+def envelope_index(
+    us: np.ndarray, s_eval: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Neighbours of each evaluation point among the sorted, distinct data positions ``us``:
+    left and right index, whether it sits on either, and whether it lies outside the data."""
     idx = np.searchsorted(us, s_eval)
     left = np.maximum(idx - 1, 0)
     right = np.minimum(idx, us.size - 1)
-    at_left = np.abs(s_eval - us[left]) <= _SAME_S_TOL_M
-    at_right = np.abs(s_eval - us[right]) <= _SAME_S_TOL_M
-    bound = np.minimum(ub[left], ub[right])
-    bound = np.where(at_right, ub[right], bound)
-    bound = np.where(at_left, ub[left], bound)
+    at_left = np.abs(s_eval - us[left]) <= SAME_S_TOL_M
+    at_right = np.abs(s_eval - us[right]) <= SAME_S_TOL_M
     outside = ((s_eval < us[0]) | (s_eval > us[-1])) & ~(at_left | at_right)
-    return bound, outside
+    return left, right, at_left, at_right, outside
+
+
+def envelope_bound(
+    ub: np.ndarray, where: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+) -> np.ndarray:
+    """The hard bound at the evaluation points from the bounds ``ub`` at the data positions
+    (last axis; any leading batch axes)."""
+    left, right, at_left, at_right, _ = where
+    bound = np.minimum(ub[..., left], ub[..., right])
+    bound = np.where(at_right, ub[..., right], bound)
+    return np.where(at_left, ub[..., left], bound)
 
 
 def safe_estimate(
