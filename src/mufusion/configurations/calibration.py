@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -39,6 +40,7 @@ from mufusion.fusion import (
     DEFAULT_GRID_M,
     MODES,
     PAPER_PRIOR,
+    FusionMode,
     GPPrior,
     assemble_inputs_batch,
     fuse_batch,
@@ -56,6 +58,7 @@ MAX_CLASS_CHANGES = 3
 LOCAL_PRESENT_PROBABILITY = 0.5
 """Probability that the local estimate is available on a horizon [-]."""
 
+_MODES: tuple[FusionMode, ...] = tuple(cast(FusionMode, m) for m in MODES)
 _CHUNK = 5_000  # horizons per fuse_batch call: bounds the (B, r, r) arrays of the batch path
 
 
@@ -256,7 +259,7 @@ def camera_random(
 
 
 def _fuse_mode(
-    h: CalibrationHorizons, rows: slice, prior: GPPrior, mode: str
+    h: CalibrationHorizons, rows: slice, prior: GPPrior, mode: FusionMode
 ) -> tuple[np.ndarray, np.ndarray]:
     """μ̂ and the posterior lower bound, shape ``(B, m)``, of some horizons in one mode."""
     s = h.s_ahead_m
@@ -326,10 +329,12 @@ def calibrate_horizons(
     if not isinstance(prior, GPPrior):
         raise ValueError(f"prior must be a GPPrior, got {type(prior).__name__}")
     n = horizons.mu_gt.shape[0]
-    fused = {mode: ([], []) for mode in MODES}
+    fused: dict[FusionMode, tuple[list[np.ndarray], list[np.ndarray]]] = {
+        mode: ([], []) for mode in _MODES
+    }
     for start in range(0, n, _CHUNK):
         rows = slice(start, min(start + _CHUNK, n))
-        for mode in MODES:
+        for mode in _MODES:
             mu_hat, lower = _fuse_mode(horizons, rows, prior, mode)
             fused[mode][0].append(mu_hat)
             fused[mode][1].append(lower)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, cast
 
 import numpy as np
 
@@ -141,11 +141,11 @@ def check_abs(name: str, arr: np.ndarray, bound: float, unit: str = "") -> None:
         _range_error(name, arr, (-bound, bound), unit)
 
 
-def check_mode(mode: object) -> str:
+def check_mode(mode: object) -> FusionMode:
     """``mode`` if it is one of :data:`MODES`, else ValueError."""
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
-    return str(mode)
+    return cast(FusionMode, mode)
 
 
 def check_positions(name: str, value: object) -> np.ndarray:
