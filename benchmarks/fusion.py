@@ -2,7 +2,7 @@
 
 The problem: grid 0, 1, …, 50 m; the local estimate (0.425 ± 0.025) at s < 5 m, the wet class
 (0.5 ± 0.1) elsewhere. Each call is timed alone; the medians are reported. Also the batched form on
-1000 horizons with different class changes.
+1000 horizons with different class changes, in both modes.
 
 Run: ``python benchmarks/fusion.py``. Prints a table and a final JSON line; numbers go to
 docs/performance.md, section "## Fusion".
@@ -56,17 +56,30 @@ def _sklearn_fuse(s, mu, margin, s_eval):
     return mean + PAPER_PRIOR.mean, std
 
 
-def _batch_inputs(rng: np.random.Generator):
+def _batch_inputs(rng: np.random.Generator, mode: str = "paper"):
     mu = np.empty((N_BATCH, DEFAULT_GRID_M.size))
     margin = np.empty_like(mu)
+    groups = np.empty(mu.shape, dtype=np.int64)
     for b in range(N_BATCH):
         change = rng.uniform(0.0, 50.0)
         first, second = rng.choice([0.8, 0.5, 0.25], 2)
         value = np.where(DEFAULT_GRID_M < change, first, second)
         mar = np.select([value == 0.8, value == 0.5], [0.2, 0.1], 0.15)
-        d = assemble_inputs(DEFAULT_GRID_M, value, mar, local_mu=rng.uniform(0.2, 0.9))
-        mu[b], margin[b] = d.mu, d.margin
-    return mu, margin
+        d = assemble_inputs(
+            DEFAULT_GRID_M, value, mar, local_mu=rng.uniform(0.2, 0.9), mode=mode
+        )
+        mu[b], margin[b], groups[b] = d.mu, d.margin, d.groups
+    return mu, margin, groups
+
+
+def _batch_us(grid, mu, margin, groups, mode: str) -> float:
+    fuse_batch(grid, mu, margin, PAPER_PRIOR, grid, groups=groups, mode=mode)
+    times = []
+    for _ in range(BATCH_REPEATS):
+        start = time.perf_counter()
+        fuse_batch(grid, mu, margin, PAPER_PRIOR, grid, groups=groups, mode=mode)
+        times.append(time.perf_counter() - start)
+    return statistics.median(times) / N_BATCH * 1e6
 
 
 def main() -> None:
@@ -86,14 +99,8 @@ def main() -> None:
     t_engine = _median_us(lambda: engine.step(data), N_OURS)
     t_sklearn = _median_us(lambda: _sklearn_fuse(s, mu, margin, grid), N_SKLEARN)
 
-    mu_b, margin_b = _batch_inputs(np.random.default_rng(0))
-    fuse_batch(grid, mu_b, margin_b, PAPER_PRIOR, grid)
-    batch_times = []
-    for _ in range(BATCH_REPEATS):
-        start = time.perf_counter()
-        fuse_batch(grid, mu_b, margin_b, PAPER_PRIOR, grid)
-        batch_times.append(time.perf_counter() - start)
-    t_batch = statistics.median(batch_times) / N_BATCH * 1e6
+    t_batch = _batch_us(grid, *_batch_inputs(np.random.default_rng(0)), "paper")
+    t_batch_safe = _batch_us(grid, *_batch_inputs(np.random.default_rng(0), "safe"), "safe")
 
     rows = [
         ("fuse, paper mode", t_paper),
@@ -101,6 +108,7 @@ def main() -> None:
         ("GPFusion.step (paper, FusionData)", t_engine),
         ("scikit-learn GaussianProcessRegressor fit+predict", t_sklearn),
         (f"fuse_batch, paper, per horizon ({N_BATCH} horizons)", t_batch),
+        (f"fuse_batch, safe, per horizon ({N_BATCH} horizons)", t_batch_safe),
     ]
     print(
         f"machine: nproc={os.cpu_count()}, python {platform.python_version()}, "
@@ -118,6 +126,7 @@ def main() -> None:
         "median_sklearn_us": round(t_sklearn, 2),
         "speedup_vs_sklearn": round(t_sklearn / t_paper, 1),
         "batched_us_per_horizon": round(t_batch, 2),
+        "batched_safe_us_per_horizon": round(t_batch_safe, 2),
         "max_abs_diff_vs_sklearn": max_diff,
     }
     sys.stdout.write(json.dumps(result) + "\n")

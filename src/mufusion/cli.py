@@ -324,6 +324,59 @@ def fusion_demo(
     console.print(f"wrote {path}")
 
 
+@app.command()
+def calibrate(
+    horizons: Annotated[
+        int, typer.Option(help="Random horizons to draw (the acceptance run uses 100000).")
+    ] = 100_000,
+    seed: Annotated[int, typer.Option(help="Seed of the random generator (>= 0).")] = 0,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path(
+        "results/calibration"
+    ),
+) -> None:
+    """Calibrate the fusion without a closed loop: random horizons (class layouts, errors within
+    the declared margins, local estimate present or absent) fused in both modes; writes
+    calibration.json and calibration.png and prints the over-estimate rate per distance."""
+    import numpy as np
+
+    from mufusion.configurations.calibration import calibrate_fusion
+    from mufusion.plots.calibration import calibration_figure
+
+    if horizons < 1:
+        _fail(f"--horizons must be >= 1, got {horizons}")
+    if seed < 0:
+        _fail(f"--seed must be >= 0, got {seed}")
+    if out.exists() and not out.is_dir():
+        _fail(f"--out must be a directory, got the file {out}")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        _fail(f"--out cannot be created: {err}")
+    started = time.perf_counter()
+    result = calibrate_fusion(np.random.default_rng(seed), n_horizons=horizons)
+    elapsed = time.perf_counter() - started
+    payload = {"command": {"horizons": horizons, "seed": seed}, **result.to_dict()}
+    (out / "calibration.json").write_text(json.dumps(payload, indent=2))
+    figure = calibration_figure(result, out / "calibration.png")
+    table = Table(title=f"fusion calibration, {horizons} horizons, seed {seed}")
+    for header in ("s ahead m", "over % paper", "over % safe", "cover % paper", "cover % safe"):
+        table.add_column(header, justify="right")
+    shown = [i for i, s in enumerate(result.s_ahead_m) if s in (0, 5, 10, 20, 30, 40, 50)]
+    rows = [(f"{result.s_ahead_m[i]:g}", i) for i in shown] + [("all", None)]
+    for label, i in rows:
+        cells = []
+        for field in ("over_estimate_rate", "lower_coverage"):
+            for cal in (result.paper, result.safe):
+                value = getattr(cal, field) if i is None else getattr(cal, f"{field}_by_s")[i]
+                cells.append(f"{100 * value:.2f}")
+        table.add_row(label, *cells)
+    Console().print(table)
+    console.print(
+        f"nominal lower-bound coverage {100 * result.nominal_coverage:.1f} %; "
+        f"{elapsed:.1f} s; {out / 'calibration.json'}, {figure.name}"
+    )
+
+
 def _run_specs(specs: list, out: Path, jobs: int | None) -> tuple[list, list[dict]]:
     """Run a campaign's specs under a progress bar; its results and their ``runs`` entries."""
     from mufusion.campaign import run_campaign

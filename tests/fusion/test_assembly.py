@@ -11,6 +11,7 @@ from mufusion.fusion import (
     LOCAL_GROUP,
     FusionData,
     assemble_inputs,
+    assemble_inputs_batch,
 )
 
 GRID = DEFAULT_GRID_M
@@ -141,3 +142,36 @@ def test_fusion_data_validation():
         FusionData(np.zeros(1), np.zeros(1), -np.ones(1), np.zeros(1, dtype=int))
     with pytest.raises(ValueError, match="mu"):
         FusionData(np.zeros(1), np.full(1, np.nan), np.ones(1), np.zeros(1, dtype=int))
+
+
+@pytest.mark.parametrize("mode", ["paper", "safe"])
+def test_batch_assembly_equals_assemble_inputs_row_by_row(mode):
+    rng = np.random.default_rng(4)
+    n_batch = 40
+    values = np.array([0.25, 0.5, 0.8])
+    margins = np.array([0.15, 0.1, 0.2])
+    kind = np.minimum((GRID[None, :] >= rng.uniform(0, 50, (n_batch, 1))).astype(int)
+                      + (GRID[None, :] >= rng.uniform(0, 8, (n_batch, 1))), 2)
+    pmu = values[kind]
+    pmar = margins[kind]
+    pmu[rng.uniform(size=pmu.shape) < 0.05] = np.nan  # camera gaps
+    local = np.where(rng.uniform(size=n_batch) < 0.5, rng.uniform(0.1, 1.0, n_batch), np.nan)
+    batch = assemble_inputs_batch(GRID, pmu, pmar, local_mu=local, s_local_m=6.0, mode=mode)
+    for b in range(n_batch):
+        one = assemble_inputs(GRID, pmu[b], pmar[b], s_local_m=6.0, mode=mode,
+                              local_mu=None if np.isnan(local[b]) else local[b])
+        p = ~np.isnan(batch.mu[b])
+        np.testing.assert_array_equal(batch.s_m[p], one.s_m)
+        np.testing.assert_array_equal(batch.mu[b, p], one.mu)
+        np.testing.assert_array_equal(batch.margin[b, p], one.margin)
+        np.testing.assert_array_equal(batch.groups[b, p], one.groups)
+
+
+def test_batch_assembly_validation():
+    pmu = np.full((2, GRID.size), 0.5)
+    with pytest.raises(ValueError, match="local_mu"):
+        assemble_inputs_batch(GRID, pmu, pmu * 0.2, local_mu=[0.4, 3.0])
+    with pytest.raises(ValueError, match="local_mu"):
+        assemble_inputs_batch(GRID, pmu, pmu * 0.2, local_mu=0.4)
+    with pytest.raises(ValueError, match="predictive_mu"):
+        assemble_inputs_batch(GRID, pmu, pmu * 0.2, local_mu=[0.4])

@@ -86,3 +86,34 @@ def test_batch_shared_positions_with_absent_points():
         rows.append(fuse(GRID[p], mu[b][p], margin[p], PAPER_PRIOR, GRID))
     _compare(batch, rows)
     np.testing.assert_allclose(batch.std[3], PAPER_PRIOR.std, atol=1e-12)
+
+
+def test_safe_batch_vectorizes_complete_rows_and_matches_fuse(monkeypatch):
+    import mufusion.fusion.batch as batch_module
+
+    rng = np.random.default_rng(21)
+    n_batch = 12
+    mu = rng.uniform(0.1, 1.0, (n_batch, GRID.size))
+    margin = rng.uniform(0.025, 0.2, (n_batch, GRID.size))
+    groups = np.repeat(np.arange(GRID.size) // 10, 1)[None, :].repeat(n_batch, axis=0)
+    groups[:4] = rng.permutation(groups[0])  # unsorted labels, still vectorized
+    mu[4, 7] = np.nan  # an absent point: horizon by horizon
+    groups[5] = np.arange(GRID.size)  # every point its own group: the paper posterior
+    groups[6, :-1] = np.arange(GRID.size - 1)  # more groups than n / 2: the dense path
+    groups[6, -1] = 0
+    margin[7] = 0.0  # noise at the floor: too small for the feature path with shared errors
+    calls = []
+    real = batch_module.fuse_validated
+    monkeypatch.setattr(
+        batch_module, "fuse_validated", lambda *a, **k: calls.append(1) or real(*a, **k)
+    )
+    batch = fuse_batch(GRID, mu, margin, PAPER_PRIOR, GRID, groups=groups, mode="safe")
+    assert len(calls) == 3  # rows 4, 6 and 7
+    for b in range(n_batch):
+        p = ~np.isnan(mu[b])
+        row = fuse(GRID[p], mu[b][p], margin[b][p], PAPER_PRIOR, GRID, groups=groups[b][p],
+                   mode="safe")
+        for field in ("mean", "std", "lower", "mu_hat"):
+            np.testing.assert_allclose(
+                getattr(batch, field)[b], getattr(row, field), rtol=0, atol=1e-10
+            )

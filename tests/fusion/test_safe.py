@@ -126,7 +126,8 @@ def test_safe_fuse_guarantee_on_arbitrary_groups(seed, n_groups):
     error_g = rng.uniform(-1.0, 1.0, n_groups) * margin_g
     mu_gt_at = dict(zip(np.unique(s), rng.uniform(0.1, 1.0, np.unique(s).size), strict=True))
     mu_gt = np.array([mu_gt_at[v] for v in s])
-    mu = mu_gt + error_g[groups]
+    # A report below 0 is clipped to 0, as the camera emulation does (still within its margin).
+    mu = np.maximum(mu_gt + error_g[groups], 0.0)
     margin = margin_g[groups]
     s_eval = np.unique(np.concatenate([s, rng.uniform(-5.0, 50.0, 20)]))
     safe = fuse(s, mu, margin, PAPER_PRIOR, s_eval, groups=groups, mode="safe")

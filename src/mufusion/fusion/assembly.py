@@ -13,7 +13,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mufusion.fusion.gp import MODES, FusionMode
+from mufusion.fusion.data import (
+    MARGIN_RANGE,
+    MU_RANGE,
+    POSITION_RANGE_M,
+    FusionData,
+    FusionMode,
+    check_mode,
+    check_range,
+)
 
 GRID_STEP_M = 1.0
 """Spacing ds of the fusion grid [m] (paper: s ∈ {0, ds, …, s_f}; the authors' code used ≈ 2 m)."""
@@ -40,25 +48,20 @@ LOCAL_GROUP = 0
 
 
 @dataclass(frozen=True)
-class FusionData:
-    """Fusion input data, sorted by position.
+class FusionDataBatch:
+    """Fusion input data of ``B`` horizons on one grid, in the form :func:`fuse_batch` takes.
 
     Attributes
     ----------
     s_m
-        Data positions ahead of the vehicle [m], shape ``(n,)``.
+        Grid positions [m], shape ``(n,)``, shared by all horizons.
     mu
-        Friction values [-], shape ``(n,)``.
+        Friction values [-], shape ``(B, n)``; NaN where a horizon has no datum at that point.
     margin
-        95 % half-widths [-], shape ``(n,)``.
+        95 % half-widths [-], shape ``(B, n)``; NaN where ``mu`` is NaN.
     groups
-        Integer labels, shape ``(n,)``: points with one label are copies of one estimate and share
-        its error (``LOCAL_GROUP`` for the local estimate, ``1, 2, …`` for class segments).
-
-    Raises
-    ------
-    ValueError
-        If the arrays differ in length, are not finite, or a margin is negative.
+        Integer labels, shape ``(B, n)`` (as :class:`FusionData`; meaningless where ``mu`` is
+        NaN).
     """
 
     s_m: np.ndarray
@@ -66,38 +69,84 @@ class FusionData:
     margin: np.ndarray
     groups: np.ndarray
 
-    def __post_init__(self) -> None:
-        arrays = {}
-        for name in ("s_m", "mu", "margin"):
-            arr = np.asarray(getattr(self, name), dtype=float).reshape(-1)
-            if not np.isfinite(arr).all():
-                raise ValueError(f"FusionData.{name} must be finite")
-            arrays[name] = arr
-        grp = np.asarray(self.groups).reshape(-1).astype(np.int64)
-        n = arrays["s_m"].size
-        if arrays["mu"].size != n or arrays["margin"].size != n or grp.size != n:
-            raise ValueError(
-                "FusionData.s_m, mu, margin and groups must have equal lengths, got "
-                f"{n}, {arrays['mu'].size}, {arrays['margin'].size} and {grp.size}"
-            )
-        if (arrays["margin"] < 0.0).any():
-            raise ValueError("FusionData.margin must be >= 0")
-        for name, arr in (*arrays.items(), ("groups", grp)):
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
-
 
 def _runs(values: np.ndarray, margins: np.ndarray, valid: np.ndarray) -> np.ndarray:
-    """Run index per grid point: a new run starts wherever (value, margin) changes or data stop."""
-    start = np.ones(values.size, dtype=bool)
+    """Run index per grid point (last axis): a new run starts wherever (value, margin) changes or
+    data stop."""
+    start = np.ones(values.shape, dtype=bool)
     same = (
-        valid[1:]
-        & valid[:-1]
-        & (values[1:] == values[:-1])
-        & (margins[1:] == margins[:-1])
+        valid[..., 1:]
+        & valid[..., :-1]
+        & (values[..., 1:] == values[..., :-1])
+        & (margins[..., 1:] == margins[..., :-1])
     )
-    start[1:] = ~same
-    return np.cumsum(start) - 1
+    start[..., 1:] = ~same
+    return np.cumsum(start, axis=-1) - 1
+
+
+def _check_inputs(
+    s_grid_m: object,
+    predictive_mu: object,
+    predictive_margin: object,
+    local_mu: np.ndarray,
+    local_margin: float,
+    s_local_m: float,
+    mode: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The checks of :func:`assemble_inputs` (``predictive_*`` of shape ``(n,)`` or ``(B, n)``,
+    ``local_mu`` with NaN where unavailable); returns the grid and the predictive arrays."""
+    check_mode(mode)
+    grid = np.asarray(s_grid_m, dtype=float)
+    if grid.ndim != 1 or grid.size == 0:
+        raise ValueError("s_grid_m must be a non-empty, one-dimensional array")
+    check_range("s_grid_m", grid, POSITION_RANGE_M, " m")
+    if (np.diff(grid) <= 0.0).any():
+        raise ValueError("s_grid_m must be strictly increasing")
+    pmu = np.asarray(predictive_mu, dtype=float)
+    pmar = np.asarray(predictive_margin, dtype=float)
+    shape = local_mu.shape + grid.shape
+    if pmu.shape != shape:
+        raise ValueError(f"predictive_mu must have shape {shape}, got {pmu.shape}")
+    if pmar.shape != shape:
+        raise ValueError(f"predictive_margin must have shape {shape}, got {pmar.shape}")
+    if np.isinf(pmu).any():
+        raise ValueError("predictive_mu must be finite or NaN (no data), got inf")
+    valid = ~np.isnan(pmu)
+    if valid.any():
+        check_range("predictive_mu", pmu[valid], MU_RANGE)
+        check_range("predictive_margin where predictive_mu is given", pmar[valid], MARGIN_RANGE)
+    if not math.isfinite(float(s_local_m)):
+        raise ValueError(f"s_local_m must be finite, got {s_local_m!r}")
+    if np.isinf(local_mu).any():
+        raise ValueError("local_mu must be finite (or absent), got inf")
+    if not np.isnan(local_mu).all():
+        check_range("local_mu", local_mu[~np.isnan(local_mu)], MU_RANGE)
+    check_range("local_margin", np.array([float(local_margin)]), MARGIN_RANGE)
+    return grid, pmu, pmar
+
+
+def _assemble(
+    grid: np.ndarray,
+    pmu: np.ndarray,
+    pmar: np.ndarray,
+    local_mu: np.ndarray,
+    local_margin: float,
+    s_local_m: float,
+    mode: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Paper Sec. III on validated ``(B, n)`` arrays: μ, margin, groups per grid point (NaN where
+    there is no datum) and the mask of points with a datum."""
+    valid = ~np.isnan(pmu)
+    run = _runs(pmu, pmar, valid)
+    use_local = ~np.isnan(local_mu)[:, None] & (grid < float(s_local_m))[None, :]
+    if mode == "safe":
+        # Stop at the first change of class (or of coverage) ahead of the vehicle.
+        use_local &= run == run[:, :1]
+    keep_pred = valid & ~use_local
+    mu = np.where(use_local, local_mu[:, None], np.where(keep_pred, pmu, np.nan))
+    margin = np.where(use_local, float(local_margin), np.where(keep_pred, pmar, np.nan))
+    groups = np.where(use_local, LOCAL_GROUP, run + LOCAL_GROUP + 1).astype(np.int64)
+    return mu, margin, groups, use_local | keep_pred
 
 
 def assemble_inputs(
@@ -141,9 +190,10 @@ def assemble_inputs(
     Raises
     ------
     ValueError
-        If the grid is not 1-D, finite and strictly increasing, lengths differ, a margin is
-        negative or NaN where the class value is given, ``local_mu`` or ``local_margin`` is not
-        finite (or the margin < 0), ``s_local_m`` is not finite, or ``mode`` is unknown.
+        If the grid is not 1-D, within ``POSITION_RANGE_M`` and strictly increasing, lengths
+        differ, a class value (where given) or ``local_mu`` is outside ``MU_RANGE`` = [0, 2], a
+        margin (where the class value is given) or ``local_margin`` is outside ``MARGIN_RANGE``
+        = [0, 1] or NaN, ``s_local_m`` is not finite, or ``mode`` is unknown.
 
     Examples
     --------
@@ -152,46 +202,65 @@ def assemble_inputs(
     >>> d.mu.tolist(), d.groups.tolist()
     ([0.42, 0.42, 0.8], [0, 0, 2])
     """
-    if mode not in MODES:
-        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
-    grid = np.asarray(s_grid_m, dtype=float)
-    if grid.ndim != 1 or grid.size == 0 or not np.isfinite(grid).all():
-        raise ValueError("s_grid_m must be a non-empty, finite, one-dimensional array")
-    if (np.diff(grid) <= 0.0).any():
-        raise ValueError("s_grid_m must be strictly increasing")
-    pmu = np.asarray(predictive_mu, dtype=float)
-    pmar = np.asarray(predictive_margin, dtype=float)
-    if pmu.shape != grid.shape:
-        raise ValueError(f"predictive_mu must have shape {grid.shape}, got {pmu.shape}")
-    if pmar.shape != grid.shape:
-        raise ValueError(f"predictive_margin must have shape {grid.shape}, got {pmar.shape}")
-    if np.isinf(pmu).any():
-        raise ValueError("predictive_mu must be finite or NaN (no data), got inf")
-    valid = ~np.isnan(pmu)
-    if not np.isfinite(pmar[valid]).all() or (pmar[valid] < 0.0).any():
-        raise ValueError("predictive_margin must be finite and >= 0 where predictive_mu is given")
-    if not math.isfinite(float(s_local_m)):
-        raise ValueError(f"s_local_m must be finite, got {s_local_m!r}")
     if local_mu is not None and not math.isfinite(float(local_mu)):
         raise ValueError(f"local_mu must be finite or None, got {local_mu!r}")
-    if not (math.isfinite(float(local_margin)) and float(local_margin) >= 0.0):
-        raise ValueError(f"local_margin must be finite and >= 0, got {local_margin!r}")
-
-    run = _runs(pmu, pmar, valid)
-    use_local = np.zeros(grid.size, dtype=bool)
-    if local_mu is not None:
-        use_local = grid < float(s_local_m)
-        if mode == "safe":
-            # Stop at the first change of class (or of coverage) ahead of the vehicle.
-            use_local &= run == run[0]
-    keep_pred = valid & ~use_local
-
-    n_local = int(use_local.sum())
-    s = np.concatenate([grid[use_local], grid[keep_pred]])
-    mu = np.concatenate([np.full(n_local, float(local_mu or 0.0)), pmu[keep_pred]])
-    margin = np.concatenate([np.full(n_local, float(local_margin)), pmar[keep_pred]])
-    groups = np.concatenate(
-        [np.full(n_local, LOCAL_GROUP, dtype=np.int64), run[keep_pred] + LOCAL_GROUP + 1]
+    local = np.array(np.nan if local_mu is None else float(local_mu))
+    grid, pmu, pmar = _check_inputs(
+        s_grid_m, predictive_mu, predictive_margin, local, local_margin, s_local_m, mode
     )
-    order = np.argsort(s, kind="stable")
-    return FusionData(s[order], mu[order], margin[order], groups[order])
+    mu, margin, groups, present = _assemble(
+        grid, pmu[None, :], pmar[None, :], local.reshape(1), local_margin, s_local_m, mode
+    )
+    p = present[0]
+    # Every value was range-checked above: the data are built without a second check.
+    return FusionData._trusted(grid[p], mu[0, p], margin[0, p], groups[0, p])
+
+
+def assemble_inputs_batch(
+    s_grid_m: np.ndarray,
+    predictive_mu: np.ndarray,
+    predictive_margin: np.ndarray,
+    *,
+    local_mu: np.ndarray,
+    local_margin: float = LOCAL_MARGIN,
+    s_local_m: float = DEFAULT_S_LOCAL_M,
+    mode: FusionMode = "paper",
+) -> FusionDataBatch:
+    """:func:`assemble_inputs` for ``B`` horizons on one grid, vectorized.
+
+    Parameters
+    ----------
+    s_grid_m
+        As :func:`assemble_inputs`, shape ``(n,)``.
+    predictive_mu, predictive_margin
+        As :func:`assemble_inputs`, shape ``(B, n)``.
+    local_mu
+        Local estimate per horizon [-], shape ``(B,)``; NaN where it is unavailable.
+    local_margin, s_local_m, mode
+        As :func:`assemble_inputs`.
+
+    Returns
+    -------
+    FusionDataBatch
+        Row ``b``'s present points (``mu`` not NaN) are exactly ``assemble_inputs`` on row ``b``.
+
+    Raises
+    ------
+    ValueError
+        As :func:`assemble_inputs`, plus ``local_mu`` not of shape ``(B,)``.
+
+    Examples
+    --------
+    >>> d = assemble_inputs_batch([0.0, 1.0], [[0.5, 0.8], [0.5, 0.8]], [[0.1, 0.2]] * 2,
+    ...                           local_mu=[0.45, np.nan], s_local_m=0.5)
+    >>> d.mu.tolist(), d.groups.tolist()
+    ([[0.45, 0.8], [0.5, 0.8]], [[0, 2], [1, 2]])
+    """
+    local = np.asarray(local_mu, dtype=float)
+    if local.ndim != 1:
+        raise ValueError(f"local_mu must have shape (B,), got {local.shape}")
+    grid, pmu, pmar = _check_inputs(
+        s_grid_m, predictive_mu, predictive_margin, local, local_margin, s_local_m, mode
+    )
+    mu, margin, groups, _ = _assemble(grid, pmu, pmar, local, local_margin, s_local_m, mode)
+    return FusionDataBatch(grid, mu, margin, groups)
