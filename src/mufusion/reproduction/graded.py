@@ -13,11 +13,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mufusion.reproduction.slide import SATURATION
 from mufusion.road import rectangle_corners
 from mufusion.scenarios.loading import scenario_from_dict
 from mufusion.sim.log import RunLog
 from mufusion.vehicle.params import vehicle_preset
+
+SATURATION = 0.98
+"""Realised utilisation at which a tire counts as saturated (sliding) [-]."""
 
 
 @dataclass(frozen=True)
@@ -37,7 +39,7 @@ class GradedOutcome:
         Speed at the first contact, or the smallest clearance while passing (``None``: none).
     peak_util_front
         Largest realised front-tire utilisation; ``saturated`` if it reached
-        :data:`~mufusion.reproduction.slide.SATURATION`.
+        :data:`SATURATION`.
     """
 
     max_abs_offset_m: float
