@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from factories import planning_step, plan_stages, run_meta, ticks
+from factories import plan_stages, planning_step, run_meta, ticks
 from mufusion.configurations import Configuration
 from mufusion.reproduction.ablation import ABLATION_CONFIGS, ablation_specs, authors_variants
 from mufusion.reproduction.authors import POPUP_SETTINGS, TURN_SETTINGS, combined_overrides
@@ -125,7 +125,7 @@ def test_slide_diagnosis_reads_the_mechanism_from_the_log() -> None:
     text = slide_text(diag)
     assert "exceeded the true limit μ_gt F_z first at t = 1.00 s" in text
     assert "the front at t = 1.48 s (before the estimate dropped)" in text
-    assert "after the front tires saturated: L slid into the opposing lane" in text
+    assert "with the front tires saturated: L slid into the opposing lane" in text
 
 
 def test_slide_text_without_saturation_says_why_the_vehicle_stayed() -> None:

@@ -32,6 +32,10 @@ EXCITATION = 0.5
 """Utilisation above which the paper's local estimator can measure friction [-]."""
 ESTIMATE_TOLERANCE = 0.1
 """|μ̂ − μ_gt| under the vehicle within which the estimate counts as having dropped to the truth."""
+SLIDE_WINDOW_S = 0.5
+"""A lane exit counts as carried by a slide if an axle was saturated this long before it [s]."""
+SPIN_BODY_SLIP_RAD = 0.5
+"""Body slip beyond which a slide is called a spin [rad] (about 30°)."""
 
 
 @dataclass(frozen=True)
@@ -54,6 +58,9 @@ class SlideDiagnosis:
         Lane room on each side of a centred vehicle, ``(lane width − vehicle width)/2``.
     heading_at_exit_rad
         Heading error to the lane when a corner first left it (``None`` if it never did).
+    sliding_axle_at_exit
+        ``"front"`` or ``"rear"``: the axle saturated within :data:`SLIDE_WINDOW_S` before the
+        first lane exit (the front if both), ``None`` if neither (or no exit).
     peak_util_front
         Largest realised front-tire utilisation.
     saturated_t_s, saturated_duration_s
@@ -95,6 +102,7 @@ class SlideDiagnosis:
     lane_excursion_m: float
     lane_margin_m: float
     heading_at_exit_rad: float | None
+    sliding_axle_at_exit: str | None
     peak_util_front: float
     saturated_t_s: float | None
     saturated_duration_s: float
@@ -182,17 +190,22 @@ def slide_diagnosis(log: RunLog) -> SlideDiagnosis:
     util = ts["util_front"].to_numpy(dtype=float)
     util_rear = ts["util_rear"].to_numpy(dtype=float)
     exit_t = _first(t, left)
-    heading = None
+    heading, sliding_axle = None, None
+    with np.errstate(invalid="ignore"):
+        saturated = util >= SATURATION
+        rear_saturated = util_rear >= SATURATION
     if exit_t is not None:
         heading = float(ts["dpsi_rad"].to_numpy()[np.flatnonzero(left)[0]])
+        window = ((t >= exit_t - SLIDE_WINDOW_S) & (t <= exit_t)).to_numpy()
+        for axle, flags in (("front", saturated), ("rear", rear_saturated)):
+            if (flags & window).any():
+                sliding_axle = axle
+                break
     stage = executed_stage(log)
     ratio = stage["planned_ratio"].to_numpy(dtype=float)
     steps = log.planning_steps
     steps = steps[steps["t_s"] >= 0.0] if not steps.empty else steps
     near = np.abs(stage["mu_hat"].to_numpy() - stage["mu_true"].to_numpy())
-    with np.errstate(invalid="ignore"):
-        saturated = util >= SATURATION
-        rear_saturated = util_rear >= SATURATION
     return SlideDiagnosis(
         configuration=log.meta.configuration.value,
         left_lane=bool(left.any()),
@@ -204,6 +217,7 @@ def slide_diagnosis(log: RunLog) -> SlideDiagnosis:
         lane_excursion_m=lane_excursion_m(log),
         lane_margin_m=0.5 * (log.meta.road.lane_width_m - log.meta.vehicle.width_m),
         heading_at_exit_rad=heading,
+        sliding_axle_at_exit=sliding_axle,
         peak_util_front=float(np.nanmax(util)),
         saturated_t_s=_first(t, saturated),
         saturated_duration_s=float(saturated.sum()) * _step(t),
@@ -239,6 +253,7 @@ def slide_text(diag: SlideDiagnosis) -> str:
     ...     configuration="L", left_lane=False, lane_exit_t_s=None, entered_opposing_lane=False,
     ...     opposing_t_s=None, max_abs_offset_m=0.2, max_outward_offset_m=0.2,
     ...     lane_excursion_m=-0.1, lane_margin_m=0.45, heading_at_exit_rad=None,
+    ...     sliding_axle_at_exit=None,
     ...     peak_util_front=0.9, saturated_t_s=None, saturated_duration_s=0.0,
     ...     peak_util_rear=0.8, rear_saturated_t_s=None, excited_t_s=1.0, over_limit_t_s=None,
     ...     over_limit_duration_s=0.0, peak_planned_ratio=0.8, local_available_t_s=1.2,
@@ -315,19 +330,21 @@ def _lane_text(diag: SlideDiagnosis) -> str:
         reason = ("the slide stayed inside the lane" if first_slide is not None
                   else "without a saturated axle there was no slide to carry it out")
         return f"{where}, and {c} stayed in its lane: {reason}.{_in_time(diag)}"
-    axle = "front" if first_slide == diag.saturated_t_s else "rear"
-    if first_slide is not None and first_slide <= diag.lane_exit_t_s:
+    axle = diag.sliding_axle_at_exit
+    if axle is not None:
         lane = "into the opposing lane" if diag.entered_opposing_lane else "out of its lane"
-        spin = " and spun" if axle == "rear" else ""
-        return (f"{where}. A corner left the lane {_at(diag.lane_exit_t_s)}, after the {axle} "
+        spin = " and spun" if diag.peak_body_slip_rad > SPIN_BODY_SLIP_RAD else ""
+        return (f"{where}. A corner left the lane {_at(diag.lane_exit_t_s)} with the {axle} "
                 f"tires saturated: {c} slid{spin} {lane}.")
     text = (
         f"{where}. A corner first left the lane {_at(diag.lane_exit_t_s)} with a heading error "
-        f"of {diag.heading_at_exit_rad:.2f} rad before any axle saturated: the body's yaw "
-        "against the curving lane, not a slide, carried the corner out"
+        f"of {diag.heading_at_exit_rad:.2f} rad and no axle saturated in the "
+        f"{SLIDE_WINDOW_S} s before: the body's yaw against the curving lane, not a slide, "
+        "carried the corner out"
     )
     if first_slide is not None:
-        text += f"; the {axle} tires saturated later, {_at(first_slide)}"
+        when = "later" if first_slide > diag.lane_exit_t_s else "earlier, briefly"
+        text += f" (the tires saturated {when}, first {_at(first_slide)})"
     return text + "." + _in_time(diag)
 
 
