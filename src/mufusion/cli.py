@@ -124,7 +124,7 @@ def reproduce(
     ablation: Annotated[
         bool,
         typer.Option(help="Also apply each of the authors' settings alone to the paper-text "
-                     "variants (about 50 more runs) and report what each does."),
+                     "variants (48 more runs) and report what each does."),
     ] = False,
 ) -> None:
     """Reproduce the paper: every configuration in both scenarios, figures and a report."""

@@ -330,6 +330,9 @@ def _lane_text(diag: SlideDiagnosis) -> str:
         reason = ("the slide stayed inside the lane" if first_slide is not None
                   else "without a saturated axle there was no slide to carry it out")
         return f"{where}, and {c} stayed in its lane: {reason}.{_in_time(diag)}"
+    exit_t = diag.lane_exit_t_s
+    if exit_t is None:  # left_lane without a tick: not produced by slide_diagnosis
+        return f"{where}."
     axle = diag.sliding_axle_at_exit
     if axle is not None:
         lane = "into the opposing lane" if diag.entered_opposing_lane else "out of its lane"
@@ -343,7 +346,7 @@ def _lane_text(diag: SlideDiagnosis) -> str:
         "carried the corner out"
     )
     if first_slide is not None:
-        when = "later" if first_slide > diag.lane_exit_t_s else "earlier, briefly"
+        when = "later" if first_slide > exit_t else "earlier, briefly"
         text += f" (the tires saturated {when}, first {_at(first_slide)})"
     return text + "." + _in_time(diag)
 
