@@ -1,6 +1,6 @@
 """The product's main claim, end to end: `mufusion reproduce` and the paper's outcomes.
 
-This runs the whole reproduction once (25 closed-loop runs, figures, report; about a minute on
+This runs the whole reproduction once (30 closed-loop runs, figures, report; about a minute on
 two cores) and asserts the outcome table. Where our outcome differs from the paper's, the test
 asserts what we report instead, and that the report explains it.
 """
@@ -45,11 +45,30 @@ def test_popup_predictive_only_collides_and_the_others_pass(reproduction, varian
     _, runs = reproduction
     p = runs[(variant, "P")]
     assert p["collision"] and 15.0 <= p["impact_speed_mps"] <= 20.0
-    for config in ("GT", "L", "F", "F-safe"):
+    # With all of the authors' settings the obstacle is 2.65 m closer (20 m from the CoG, not
+    # the front) and GT passes by centimetres: the fused configurations, planning with 7-9 %
+    # less force, hit it (the report explains it from the logs).
+    passing = ("GT", "L", "F", "F-safe") if variant == "popup-paper" else ("GT", "L")
+    for config in passing:
         run = runs[(variant, config)]
         assert not run["collision"], config
         assert run["min_clearance_m"] is not None and run["min_clearance_m"] > 0.0, config
         assert run["max_abs_lateral_offset_m"] < 3 * 3.5 / 2, config  # stayed on the road
+
+
+def test_authors_turn_local_only_saturates_and_slides_into_the_opposing_lane(reproduction):
+    out, runs = reproduction
+    l_run = runs[("turn-authors", "L")]
+    assert l_run["entered_opposing_lane"] and l_run["max_force_excess"] > 0.5
+    assert not runs[("turn-authors", "P")]["left_lane"]
+    report = (out / "report.md").read_text()
+    # The slide mechanism is read from L's log: its front tires saturated.
+    section = report.split("### Why L leaves its lane in the turn, or why not")[1]
+    authors = section.split("**turn, the authors' settings.**")[1].split("\n\n")[0]
+    assert "The tires saturated (utilisation ≥ 0.98): the front at" in authors
+    assert "slid and spun into the opposing lane" in authors or "slid into the opposing" in authors
+    paper = section.split("**turn, paper settings.**")[1].split("\n\n")[0]
+    assert "never exceeded the true limit" in paper
 
 
 def test_popup_planned_force_utilisation_against_ground_truth(reproduction):
@@ -68,6 +87,8 @@ def test_report_puts_every_difference_next_to_an_explanation(reproduction):
     report = (out / "report.md").read_text()
     assert (out / "report.html").is_file()
     assert "No explanation recorded" not in report
-    assert report.count("| agrees |") >= 20
+    assert report.count("| agrees |") >= 24
+    assert "## The authors' settings" in report and "Not represented:" in report
+    assert any((out / "figures").glob("turn-*-slide.png"))
     assert any((out / "figures").glob("*.png"))
     assert {r["config"] for r in runs.values()} == {"GT", "L", "P", "F", "F-safe"}

@@ -122,21 +122,35 @@ def reproduce(
         bool, typer.Option(help="Also run both scenarios with the passenger car.")
     ] = True,
     gif: Annotated[bool, typer.Option(help="Write animated GIFs of the key runs.")] = True,
+    ablation: Annotated[
+        bool,
+        typer.Option(help="Also apply each of the authors' settings alone to the paper-text "
+                     "variants (48 more runs) and report what each does."),
+    ] = False,
 ) -> None:
     """Reproduce the paper: every configuration in both scenarios, figures and a report."""
     from mufusion.plots.run_figures import reproduction_figures
     from mufusion.reproduction import explain_differences, reproduction_specs, write_report
+    from mufusion.reproduction.ablation import ablation_specs
 
     if jobs is not None and jobs < 1:
         _fail(f"--jobs must be >= 1, got {jobs}")
     _check_out_dir(out)
     specs = reproduction_specs(include_car=car)
+    extra = ablation_specs() if ablation else []
     started = time.perf_counter()
-    results, runs = _run_specs(specs, out, jobs)
-    run_dirs = {(spec.variant, spec.config): directory for spec, _m, directory in results}
+    from mufusion.campaign import with_indices
+
+    # One index per run over both lists: run directory names never collide.
+    results, all_runs = _run_specs(with_indices([*specs, *extra]), out, jobs)
+    runs, ablation_runs = all_runs[: len(specs)], all_runs[len(specs):]
+    run_dirs = {(spec.variant, spec.config): directory
+                for spec, _m, directory in results[: len(specs)]}
     figures = reproduction_figures(run_dirs, out / "figures", gif=gif)
     elapsed = time.perf_counter() - started
     summary = {"runs": runs, "elapsed_s": round(elapsed, 1)}
+    if ablation_runs:
+        summary["ablation"] = ablation_runs
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     md, html = write_report(summary, out, figures, explain_differences(runs))
     _print_table(runs)

@@ -150,8 +150,10 @@ def candidate_rollouts(
         kappa = np.asarray(curvature_of_s(x[State.s]), dtype=float) * np.ones(m_count)
         mu = np.asarray(mu_hat_of_s(x[State.s]), dtype=float) * np.ones(m_count)
         fzf, fzr = normal_loads_n(ax, params)
+        # A diverged candidate (discarded by the caller) may sit where μ̂ is not finite.
+        mu_stiffness = np.where(np.isfinite(mu) & (mu > 0.0), mu, 1.0)
         c_r = rear_cornering_stiffness_n_per_rad(
-            params, fzr, utilization_factor, mu_hat=mu, table=stiffness_table
+            params, fzr, utilization_factor, mu_hat=mu_stiffness, table=stiffness_table
         )
         fyf = steering_force_n(x, d_t, kappa, v, params, config)
         f_long = m * config.speed_gain_1_per_s * (v_t - x[State.vx])

@@ -14,6 +14,7 @@ from mufusion.configurations import Configuration
 from mufusion.plots.animation import animate_run
 from mufusion.plots.estimate import plot_fused_estimate
 from mufusion.plots.forces import plot_planned_forces
+from mufusion.plots.slide import plot_slide
 from mufusion.plots.snapshots import plot_snapshots
 from mufusion.plots.traces import plot_lateral_and_speed
 from mufusion.reproduction.variants import Variant, default_variant, variant
@@ -67,6 +68,13 @@ def variant_figures(
     if Configuration.F in logs:
         figures[f"{tag}/estimate"] = plot_fused_estimate(
             logs[Configuration.F], t_c, out_dir / f"{tag}-fused_estimate.png"
+        )
+    # The turn's slide mechanism (paper Sec. IV-C): L, with GT and F for reference.
+    slide_configs = (Configuration.L, Configuration.F, Configuration.GT)
+    if var.scenario == "turn" and Configuration.L in logs:
+        figures[f"{tag}/slide"] = plot_slide(
+            [logs[c] for c in slide_configs if c in logs], out_dir / f"{tag}-slide.png",
+            title=f"{var.title}: the slide mechanism",
         )
     if gif and var.animate:
         for config in pair_configs:

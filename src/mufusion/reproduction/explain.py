@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from mufusion.configurations import Configuration
-from mufusion.reproduction.variants import Criterion
+from mufusion.reproduction.slide import slide_diagnosis, slide_text
+from mufusion.reproduction.variants import CLEARANCE_TOLERANCE_M, Criterion
 from mufusion.reproduction.verdicts import Outcome, Verdict, compare_with_paper
 from mufusion.sim.log import RunLog, load_run
 
@@ -39,7 +40,7 @@ def explain_differences(runs: Iterable[Mapping[str, Any]]) -> dict[str, str]:
     texts: dict[str, str] = {}
     for run in runs:
         for verdict in compare_with_paper(run):
-            if verdict.outcome is not Outcome.DIFFERS:
+            if verdict.outcome is Outcome.AGREES:
                 continue
             text = _explain(verdict, run, by_key)
             if text:
@@ -54,11 +55,57 @@ def _explain(verdict: Verdict, run: Mapping[str, Any], by_key: Mapping) -> str |
     criterion = verdict.fact.criterion
     if criterion in (Criterion.STAYS_IN_LANE, Criterion.OPPOSING_LANE):
         return _lane_text(verdict, run, log, by_key)
+    if criterion is Criterion.COLLISION and run.get("collision"):
+        return _collision_text(run, log, by_key)
     if criterion is Criterion.COLLISION and verdict.config is Configuration.P:
         return _evasion_text(run, log)
+    if criterion is Criterion.CLEARANCE and run.get("collision"):
+        return (f"{verdict.config.value} collided, so it has no clearance while passing "
+                "(its collision is explained above).")
     if criterion is Criterion.CLEARANCE:
         return _clearance_text(log)
     return None
+
+
+def _collision_text(run, log: RunLog, by_key) -> str | None:
+    """Why a configuration the paper has passing hit the obstacle, against the GT run."""
+    obstacles = log.meta.obstacles
+    ts = log.timeseries
+    hit = ts[ts["in_collision"].astype(bool)]
+    if not obstacles or hit.empty:
+        return None
+    ob, first = obstacles[0], hit.iloc[0]
+    need = 0.5 * (ob.width_m + log.meta.vehicle.width_m)
+    mu_hat, mu_true = _estimate_at_comparison(log)
+    name = log.meta.configuration.value
+    text = (
+        f"{name} planned with μ̂ = {mu_hat:.3f} against μ = {mu_true:.2f} (planned-force "
+        f"utilisation {_budget(run)} GT's). It hit the obstacle at t = {float(first['t_s']):.2f} s "
+        f"and {float(first['speed_mps']):.1f} m/s with its centre {float(first['d_m']):.2f} m "
+        f"from the lane centre; an aligned body clears the obstacle (centre at "
+        f"{ob.d_m:+.2f} m) only {need:.2f} m to its side."
+    )
+    gt = by_key.get((run["variant"], Configuration.GT.value))
+    gt_log = _load(gt) if gt else None
+    if gt_log is not None:
+        gts = gt_log.timeseries
+        d_gt = float(np.interp(float(first["s_m"]), gts["s_m"], gts["d_m"]))
+        clearance = gt.get("min_clearance_m")
+        outcome = ("also hit it" if gt.get("collision") else
+                   f"passed with {fmt_clearance(clearance)} clearance")
+        text += (
+            f" GT, with the full force budget, was {d_gt:.2f} m from the lane centre at the "
+            f"same progress ({abs(d_gt - float(first['d_m'])):.2f} m further aside) and "
+            f"{outcome}."
+        )
+        if clearance is not None and clearance < CLEARANCE_TOLERANCE_M:
+            text += (" Even the true friction leaves almost no margin at this obstacle "
+                     "distance, and the smaller budget loses it.")
+    return text
+
+
+def fmt_clearance(value: Any) -> str:
+    return "no" if value is None else f"{float(value):.2f} m"
 
 
 def _clearance_text(log: RunLog) -> str | None:
@@ -76,7 +123,7 @@ def _clearance_text(log: RunLog) -> str | None:
         f"At the closest point (t = {float(row['t_s']):.2f} s, clearance "
         f"{float(row['clearance_m']):.2f} m) the vehicle's centre was {float(row['d_m']):.2f} m "
         f"to the side, where the planner's corridor asks for {wanted:.2f} m (obstacle and "
-        f"vehicle half-widths plus its {margin:.1f} m margin): from the state the swerve had "
+        f"vehicle half-widths plus its {margin:.2f} m margin): from the state the swerve had "
         "reached, no plan within the friction limits could open the full margin in time (the "
         "corridor is soft, so the least-violating plan is taken), and the body's heading of "
         f"{float(row['dpsi_rad']):.2f} rad swings its corners towards the obstacle."
@@ -105,6 +152,22 @@ def _lane_margin_m(log: RunLog) -> float:
 
 
 def _lane_text(verdict: Verdict, run, log: RunLog, by_key) -> str:
+    text = _lane_estimate_text(verdict, run, log, by_key)
+    mechanism = _mechanism(log)
+    return f"{text} {mechanism}" if mechanism else text
+
+
+def _mechanism(log: RunLog) -> str | None:
+    """The slide mechanism of a lane-keeping run, if its log has what it takes."""
+    if log.plans.empty or log.planning_steps.empty:
+        return None
+    try:
+        return slide_text(slide_diagnosis(log))
+    except ValueError:  # a log without a scenario to rebuild its road from
+        return None
+
+
+def _lane_estimate_text(verdict: Verdict, run, log: RunLog, by_key) -> str:
     mu_hat, mu_true = _estimate_at_comparison(log)
     margin = _lane_margin_m(log)
     offset = float(run.get("max_abs_lateral_offset_m") or 0.0)

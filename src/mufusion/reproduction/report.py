@@ -18,6 +18,7 @@ import markdown
 
 from mufusion.configurations import Configuration
 from mufusion.metrics import TABLE_COLUMNS, format_cell
+from mufusion.reproduction.authors_report import authors_sections
 from mufusion.reproduction.variants import (
     CLEARANCE_TOLERANCE_M,
     IMPACT_SPEED_TOLERANCE_MPS,
@@ -39,6 +40,9 @@ FIGURE_CAPTIONS: dict[str, str] = {
     "true μ, input data with margins, posterior mean and 95 % band, μ̂ used by the planner "
     "(cf. paper Fig. 3l, 4l).",
     "animation": "Animated top view of the run.",
+    "slide": "The slide mechanism against time: L's (and GT's, F's) executed planned front force "
+    "over the true friction circle μ_gt F_z, realised front utilisation, lateral deviation and "
+    "body slip; dotted: the local estimate becomes available (cf. paper Sec. IV-C).",
 }
 """Caption per figure kind; figure keys are ``"<variant key>/<kind>"`` or
 ``"<variant key>/<config>/animation"``."""
@@ -149,6 +153,7 @@ def build_report_markdown(
         if keys:
             md += ["### Figures", "", *figure_lines(keys, in_section=True)]
 
+    md += authors_sections(summary)
     md += ["## Safe fusion mode (F-safe)", ""]
     fused = (Configuration.F.value, Configuration.F_SAFE.value)
     safe_groups = [(v, g) for v, g in groups if any(r["config"] == fused[1] for r in g)]
@@ -205,7 +210,9 @@ def write_report(
     ----------
     summary : mapping
         ``runs``: list of dicts with ``variant`` (a variant key), ``config`` and the run's
-        metrics; ``elapsed_s``: total wall-clock time [s].
+        metrics; ``elapsed_s``: total wall-clock time [s]; optionally ``ablation``: the runs
+        of :func:`~mufusion.reproduction.ablation.ablation_specs` (same keys), shown in the
+        section on the authors' settings.
     out_dir : str or Path
         Directory of the report (created if needed); images are linked relative to it.
     figures : mapping of str to Path

@@ -13,7 +13,7 @@ def reproduction_specs(include_car: bool = True) -> list[RunSpec]:
     Examples
     --------
     >>> len(reproduction_specs(include_car=False))
-    15
+    20
     """
     return with_indices([
         RunSpec(scenario=v.scenario, config=c.value, variant=v.key, overrides=v.overrides)

@@ -12,6 +12,14 @@ from dataclasses import dataclass, field
 from enum import Enum
 
 from mufusion.configurations import Configuration
+from mufusion.reproduction.authors import (
+    POPUP_SETTINGS,
+    POPUP_UNREPRESENTED,
+    TURN_SETTINGS,
+    TURN_UNREPRESENTED,
+    Setting,
+    combined_overrides,
+)
 
 C = Configuration
 
@@ -122,6 +130,13 @@ class Variant:
         The configuration shown above F in the snapshots (the one that fails in the paper).
     animate
         Whether the reproduction writes GIFs of this variant.
+    settings
+        The authors' settings this variant applies (:mod:`mufusion.reproduction.authors`); its
+        overrides are theirs. Empty for the paper-text variants.
+    unrepresented
+        What the authors' code set that the variant cannot represent, and why.
+    baseline
+        Key of the variant it is compared with side by side (the paper-text one), or ``None``.
     """
 
     key: str
@@ -133,6 +148,9 @@ class Variant:
     snapshot_positions_m: tuple[float, ...] = (0.0,)
     contrast: Configuration = C.P
     animate: bool = False
+    settings: tuple[Setting, ...] = ()
+    unrepresented: tuple[str, ...] = ()
+    baseline: str | None = None
 
     def facts(self, configuration: Configuration) -> tuple[Fact, ...]:
         """The paper's outcomes for ``configuration`` in this variant (none for F-safe)."""
@@ -152,6 +170,9 @@ and friction-aware speed reference (:mod:`mufusion.planner.speed_profile`)."""
 
 TURN_SNAPSHOTS_M = (0.0, 15.0, 30.0, 55.0)
 POPUP_SNAPSHOTS_M = (0.0, 2.0, 18.0, 40.0)
+# The authors' turn starts where μ drops, 44 m before the arc; their snapshots (and so the
+# paper's "s = 0") are about 5 m before the arc, i.e. 39 m after our start.
+AUTHORS_TURN_SNAPSHOTS_M = tuple(39.0 + p for p in TURN_SNAPSHOTS_M)
 
 VARIANTS: tuple[Variant, ...] = (
     Variant("turn-paper", "turn", "turn, paper settings", PAPER_METHOD, True, {},
@@ -159,10 +180,22 @@ VARIANTS: tuple[Variant, ...] = (
     # At μ = 1.0 the paper's rules give P 1 − 0.6/1.0 = −40 % and F ≈ −5 %.
     Variant("popup-paper", "popup", "pop-up, paper settings (μ = 1.0)", PAPER_METHOD, True,
             utilization_facts(-0.40, -0.05), POPUP_SNAPSHOTS_M, C.P, animate=True),
-    # The authors' configuration (μ = 0.89): P −32.6 %, F −5.6 % exactly (Sec. IV-D).
-    Variant("popup-authors", "popup", "pop-up, the authors' μ = 0.89",
-            ("friction.mu=0.89", *PAPER_METHOD), True, utilization_facts(-0.326, -0.056),
-            POPUP_SNAPSHOTS_M, C.P),
+    # Everything the authors' code set for the turn that a scenario can represent: a pure arc,
+    # μ dropping 44 m before it, 15 m/s, their local-estimator timing, error sign and start
+    # value, camera classes, surface-dependent tires, and stiffness from μ̂. The paper's
+    # outcomes are the facts to check: GT, P, F stay in their lane, L leaves it.
+    Variant("turn-authors", "turn", "turn, the authors' settings",
+            (*PAPER_METHOD, *combined_overrides(TURN_SETTINGS)), True, {},
+            AUTHORS_TURN_SNAPSHOTS_M, C.L,
+            settings=TURN_SETTINGS, unrepresented=TURN_UNREPRESENTED, baseline="turn-paper"),
+    # The authors' pop-up: μ = 0.89, obstacle 20 m ahead of the CoG and 0.2 m left, their
+    # clearance margin, estimator timing, classes and tires. At μ = 0.89 the paper's numbers
+    # are exact: P −32.6 %, F −5.6 % (Sec. IV-D).
+    Variant("popup-authors", "popup", "pop-up, the authors' settings (μ = 0.89)",
+            (*PAPER_METHOD, *combined_overrides(POPUP_SETTINGS)), True,
+            utilization_facts(-0.326, -0.056),
+            POPUP_SNAPSHOTS_M, C.P, settings=POPUP_SETTINGS, unrepresented=POPUP_UNREPRESENTED,
+            baseline="popup-paper"),
     Variant("turn-car", "turn", "turn, passenger car", ("vehicle=car", *PAPER_METHOD), False, {},
             TURN_SNAPSHOTS_M, C.L),
     Variant("popup-car", "popup", "pop-up, passenger car", ("vehicle=car", *PAPER_METHOD), False,

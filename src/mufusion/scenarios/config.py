@@ -133,6 +133,8 @@ class PlannerSettings(_Strict):
     backend: Literal["acados", "casadi"] = "acados"
     use_sampling: bool = True
     rate_hz: Annotated[float, Field(ge=1.0, le=50.0)] = 10.0
+    obstacle_margin_m: Annotated[float, Field(ge=0.0, le=3.0)] = 0.5
+    """Room the planner keeps between the vehicle's side and an obstacle's side [m]."""
     stiffness: Literal["fixed", "from_mu_hat"] = "fixed"
     """Cornering stiffness of the planner's rear tire and the controller's inverse tire model:
     ``fixed`` (the vehicle's tire on every surface) or ``from_mu_hat`` (the plant's tire table,

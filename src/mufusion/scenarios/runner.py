@@ -60,6 +60,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         lane_d_min_m=lo,
         lane_d_max_m=hi,
         safety=cfg.safety,
+        obstacle_margin_m=cfg.planner.obstacle_margin_m,
         stiffness=cfg.planner.stiffness,
         stiffness_table=(
             cfg.sim.surface_tires() if cfg.planner.stiffness == "from_mu_hat" else None
