@@ -77,6 +77,9 @@ class RunMetrics:
         Exceptions raised by a component (friction source, planner, controller) or the loop.
     minimal_risk
         Whether the vehicle entered the minimal-risk manoeuvre; ``minimal_risk_at_s`` when.
+    faults, reactions
+        The injected fault kinds, and the loop's reactions counted by kind
+        (e.g. ``"estimate_fallback×3, minimal_risk×1"``; empty when none).
     """
 
     collision: bool
@@ -109,6 +112,8 @@ class RunMetrics:
     component_errors: int = 0
     minimal_risk: bool = False
     minimal_risk_at_s: float | None = None
+    faults: str = ""
+    reactions: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         return {k: _clean(v) for k, v in asdict(self).items()}
@@ -237,6 +242,13 @@ def _reliability(log: RunLog) -> dict[str, Any]:
         "component_errors": int(kinds.isin(ERROR_EVENTS).sum()),
         "minimal_risk": bool(len(mrm)),
         "minimal_risk_at_s": float(mrm["t_s"].iloc[0]) if len(mrm) else None,
+        "faults": ", ".join(
+            sorted({str(d).split(" ", 1)[0] for d in events["detail"][kinds == "fault_scheduled"]})
+        ) if not events.empty else "",
+        "reactions": ", ".join(
+            f"{kind}×{count}"
+            for kind, count in kinds[kinds != "fault_scheduled"].value_counts().sort_index().items()
+        ),
     }
 
 
