@@ -12,7 +12,7 @@ import os
 import shlex
 import time
 from pathlib import Path
-from typing import Annotated, NoReturn
+from typing import Annotated, Literal, NoReturn
 
 import typer
 from rich.console import Console
@@ -210,6 +210,7 @@ def campaign(
         _fail(f"--jobs must be >= 1, got {jobs}")
     if engine not in ENGINES:
         _fail(f"--engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+    engine_name: Literal["pool", "ray"] = "ray" if engine == "ray" else "pool"
     if address is not None and engine != "ray":
         _fail("--address needs --engine ray")
     parts = shard.split("/")
@@ -229,7 +230,7 @@ def campaign(
         task = progress.add_task("runs", total=len(specs))
         try:
             results = execute_campaign(
-                specs, out / "runs", engine=engine, jobs=jobs, address=address, resume=resume,
+                specs, out / "runs", engine=engine_name, jobs=jobs, address=address, resume=resume,
                 on_done=lambda _s: progress.advance(task),
             )
         except CampaignInterrupted as stop:

@@ -23,7 +23,7 @@ from mufusion.sim.log import RunLog
 from mufusion.sim.records import RunMeta
 
 # One colour per configuration, the same in every figure.
-CONFIG_COLORS: dict[Configuration, str] = {
+CONFIG_COLORS: dict[str, str] = {
     Configuration.GT: "black",
     Configuration.L: "tab:orange",
     Configuration.P: "tab:green",
