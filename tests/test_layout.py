@@ -98,7 +98,7 @@ def test_no_import_cycle_between_modules() -> None:
         stack.append(module)
         for other in sorted(graph[module]):
             if state.get(other) == 1:
-                cycle = stack[stack.index(other):] + [other]
+                cycle = [*stack[stack.index(other):], other]
                 raise AssertionError("import cycle: " + " → ".join(cycle))
             if other not in state:
                 visit(other)
