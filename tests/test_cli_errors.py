@@ -1,0 +1,58 @@
+"""Bad input on the command line: exit code 2 and the field named, before any simulation."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from mufusion.cli import app
+
+
+def _run(*args: str):
+    return CliRunner().invoke(app, list(args))
+
+
+def _said(result) -> str:
+    return " ".join(result.output.split())
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (["run", "turn", "--set", "friction.mu=0.1"], "unknown key 'friction.mu' for the 'turn'"),
+        (["run", "turn", "--set", "obstacle.distance_m=20"], "unknown key 'obstacle'"),
+        (["run", "popup", "--set", "turn.radius_m=30"], "unknown key 'turn'"),
+        (["run", "turn", "--set", "initial_speed_mps=true"], "initial_speed_mps: expected a number"),
+        (["run", "turn", "--set", "seed=1", "--set", "seed=2"], "'seed' is given more than once"),
+        (["run", "popup", "--set", "duration_s=0.4"], "duration_s must exceed"),
+        (["run", "popup", "--set", "sim.controller_rate_hz=60"], "sim.controller_rate_hz"),
+        (["run", "popup", "-c", "F_safe"], "--config must be one of"),
+        (["run", "nowhere.toml"], "does not exist"),
+    ],
+)
+def test_bad_run_input_exits_2_naming_the_field(args, fragment: str, tmp_path: Path) -> None:
+    result = _run(*args, "--out", str(tmp_path / "out"))
+    assert result.exit_code == 2, result.output
+    assert fragment in _said(result)
+    assert not (tmp_path / "out").exists()  # nothing was run or written
+
+
+def test_out_pointing_at_a_file_is_refused_before_the_run(tmp_path: Path) -> None:
+    target = tmp_path / "taken"
+    target.write_text("not a directory")
+    for command in (["run", "popup"], ["reproduce"]):
+        result = _run(*command, "--out", str(target))
+        assert result.exit_code == 2, result.output
+        assert "is a file, not a directory" in _said(result)
+    nested = _run("run", "popup", "--out", str(target / "sub"))
+    assert nested.exit_code == 2 and "is a file" in _said(nested)
+
+
+def test_a_binary_scenario_file_is_named(tmp_path: Path) -> None:
+    path = tmp_path / "garbage.toml"
+    path.write_bytes(bytes(range(256)))
+    result = _run("run", str(path), "--out", str(tmp_path / "out"))
+    assert result.exit_code == 2
+    assert "garbage.toml" in _said(result)
