@@ -24,7 +24,7 @@ def _said(result) -> str:
         (["run", "turn", "--set", "friction.mu=0.1"], "unknown key 'friction.mu' for the 'turn'"),
         (["run", "turn", "--set", "obstacle.distance_m=20"], "unknown key 'obstacle'"),
         (["run", "popup", "--set", "turn.radius_m=30"], "unknown key 'turn'"),
-        (["run", "turn", "--set", "initial_speed_mps=true"], "initial_speed_mps: expected a number"),
+        (["run", "turn", "--set", "initial_speed_mps=true"], "initial_speed_mps: expected a"),
         (["run", "turn", "--set", "seed=1", "--set", "seed=2"], "'seed' is given more than once"),
         (["run", "popup", "--set", "duration_s=0.4"], "duration_s must exceed"),
         (["run", "popup", "--set", "sim.controller_rate_hz=60"], "sim.controller_rate_hz"),
