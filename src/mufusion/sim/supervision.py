@@ -103,7 +103,7 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     >>> s = np.array([0.0, 10.0])
     >>> post = FusedEstimate(s, np.array([0.5, 0.5]), np.ones(2), np.zeros(2), np.zeros(2))
     >>> est = FrictionEstimate(s, np.array([0.1, 0.3]), False, None, fused=post)
-    >>> relaxed_estimate(est, 0.5).mu_hat.tolist()
+    >>> np.round(relaxed_estimate(est, 0.5).mu_hat, 6).tolist()
     [0.3, 0.4]
     """
     if estimate.fused is None:
