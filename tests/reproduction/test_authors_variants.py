@@ -14,6 +14,7 @@ from mufusion.reproduction.slide import slide_diagnosis, slide_text
 from mufusion.reproduction.variants import PAPER_FACTS, variant
 from mufusion.scenarios import load_scenario
 from mufusion.sim.log import RunLog
+from mufusion.sim.world import World
 from mufusion.vehicle.params import TRUCK
 
 C = Configuration
@@ -94,9 +95,14 @@ def _turn_log(d_m, util_front, ratio, available_from_s, left_from_s=None, util_r
     left = np.zeros(t.shape, bool) if left_from_s is None else t >= left_from_s
     meta = run_meta(configuration=C.L, scenario_config=cfg.model_dump(mode="json"))
     log = RunLog(meta)
+    # The lane margin as the loop records it: the footprint placed on the road.
+    world = World(road, to_planner_obstacle=lambda o: o)
+    margin = [world.footprint_status((float(xi), float(yi), float(pi)), 0.0, float(si),
+                                     TRUCK).lane_margin_m
+              for xi, yi, pi, si in zip(x, y, psi, s, strict=True)]
     log.extend(ticks(t.size, s_m=s, d_m=d, x_m=x, y_m=y, psi_rad=psi, util_front=util_front,
                      util_rear=util_rear, left_lane=left, in_opposing_lane=left,
-                     body_slip_rad=0.01, speed_mps=10.0))
+                     body_slip_rad=0.01, speed_mps=10.0, lane_margin_m=np.asarray(margin)))
     fzf, mu = 5e4, 0.4
     for step, t_plan in enumerate(np.arange(0.0, 4.0, 0.1).round(1)):
         r = float(ratio(t_plan))
@@ -138,7 +144,7 @@ def test_slide_text_without_saturation_says_why_the_vehicle_stayed() -> None:
     assert "stayed in its lane: without a saturated axle" in text
 
 
-def test_lane_excursion_places_the_footprint_corners_on_the_road() -> None:
+def test_lane_excursion_reads_the_recorded_footprint_margin() -> None:
     # On the straight before the turn (8 m at 2 m/s; the curve begins 20 m ahead), an aligned
     # truck at d = 0.65 m has its left corners at 0.65 + 1.3 = 1.95 m: 0.2 m beyond the 3.5 m
     # lane's edge; at d = 0 they are 0.45 m inside.

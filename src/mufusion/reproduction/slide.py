@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from mufusion.metrics.run_metrics import SPIN_BODY_SLIP_RAD
 from mufusion.reproduction.graded import SATURATION, lane_excursion_m
 from mufusion.sim.log import RunLog
 from mufusion.vehicle.params import GRAVITY_MPS2
@@ -34,8 +35,6 @@ ESTIMATE_TOLERANCE = 0.1
 """|μ̂ − μ_gt| under the vehicle within which the estimate counts as having dropped to the truth."""
 SLIDE_WINDOW_S = 0.5
 """A lane exit counts as carried by a slide if an axle was saturated this long before it [s]."""
-SPIN_BODY_SLIP_RAD = 0.5
-"""Body slip beyond which a slide is called a spin [rad] (about 30°)."""
 
 
 @dataclass(frozen=True)
