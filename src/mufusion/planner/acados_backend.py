@@ -6,6 +6,7 @@ import hashlib
 import importlib.util
 import json
 import logging
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -141,6 +142,8 @@ class AcadosBackend:
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
         self.solver = module.AcadosOcpSolverCython(name, "SQP_RTI", n)
+        # What solve() last wrote per problem field (stage rows), to skip unchanged stages.
+        self._written: dict[str, np.ndarray] = {}
 
     def solve(
         self,
@@ -166,27 +169,55 @@ class AcadosBackend:
             ubu[1] = min(ubu[1], max_drive_force_n)
         s.set(0, "lbx", x0)
         s.set(0, "ubx", x0)
-        w_stage = np.diag(weights[: N_STATES + N_INPUTS])
         for k in range(n):
             s.set(k, "x", guess_x[k])
             s.set(k, "u", guess_u[k])
-            s.set(k, "p", p[k])
-            s.cost_set(k, "yref", yref[k])
-            s.cost_set(k, "W", w_stage)
-            s.constraints_set(k, "ubu", ubu)
-            if k > 0:
-                s.constraints_set(k, "lbx", np.array([d_lo[k - 1], min_speed_mps]))
-                s.constraints_set(k, "ubx", np.array([d_hi[k - 1], MAX_SPEED_MPS]))
         s.set(n, "x", guess_x[n])
-        s.set(n, "p", p[n - 1])
-        s.cost_set(n, "yref", yref[n][:N_STATES])
-        s.cost_set(n, "W", w_stage[:N_STATES, :N_STATES])
-        s.constraints_set(n, "lbx", np.array([d_lo[n - 1]]))
-        s.constraints_set(n, "ubx", np.array([d_hi[n - 1]]))
+        # The problem data below often repeat from one step to the next (weights and drive
+        # bound per mode, references on a straight, parameters of a uniform road): only the
+        # stages whose values changed are written.
+        self._update("p", s.set, p[:n], range(n))
+        self._update("p_terminal", s.set, p[n - 1 : n], (n,))
+        self._update("yref", s.cost_set, yref[:n], range(n))
+        self._update("yref_terminal", s.cost_set, yref[n:, :N_STATES], (n,))
+        w_stage = np.diag(weights[: N_STATES + N_INPUTS])
+        self._update("W", s.cost_set, w_stage[None], range(n))
+        self._update("W_terminal", s.cost_set, w_stage[None, :N_STATES, :N_STATES], (n,))
+        self._update("ubu", s.constraints_set, ubu[None], range(n))
+        lbx = np.empty((n, 2))
+        lbx[:, 0], lbx[:, 1] = d_lo, min_speed_mps
+        ubx = np.empty((n, 2))
+        ubx[:, 0], ubx[:, 1] = d_hi, MAX_SPEED_MPS
+        self._update("lbx", s.constraints_set, lbx[:-1], range(1, n))
+        self._update("ubx", s.constraints_set, ubx[:-1], range(1, n))
+        self._update("lbx_terminal", s.constraints_set, lbx[-1:, :1], (n,))
+        self._update("ubx_terminal", s.constraints_set, ubx[-1:, :1], (n,))
         status = s.solve()
         xs = np.array([s.get(k, "x") for k in range(n + 1)])
         us = np.array([s.get(k, "u") for k in range(n)])
         return int(status), xs, us
+
+    def _update(self, key: str, setter, values: np.ndarray, stages: Sequence[int]) -> None:
+        """Write ``values[i]`` to ``stages[i]`` where it differs from what was written last.
+
+        One row of ``values`` for several stages writes it to each of them. The solver keeps
+        problem data until overwritten (``reset`` clears iterates only), so skipping an
+        unchanged stage leaves the solve exactly as if it were written again.
+        """
+        field = key.removesuffix("_terminal")
+        # Forgotten until every write succeeded: after an error, everything is written again.
+        previous = self._written.pop(key, None)
+        if previous is None or previous.shape != values.shape:
+            rows = range(len(stages))
+        elif len(values) == 1:
+            rows = range(len(stages)) if np.any(values != previous) else range(0)
+        else:
+            differs = (values != previous).reshape(len(stages), -1)
+            rows = np.flatnonzero(differs.any(axis=1)).tolist()
+        uniform = len(values) == 1
+        for i in rows:
+            setter(stages[i], field, values[0 if uniform else i])
+        self._written[key] = values.copy()
 
     def reset(self) -> None:
         """Zero every iterate (primal, dual, slacks) and the QP solver's memory.
