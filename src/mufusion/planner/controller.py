@@ -11,6 +11,7 @@ The command is rate-limited and clipped to the actuators' ranges.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,6 +74,13 @@ def _rising_branch(fz: float, mu: float, tire: TireParams) -> tuple[np.ndarray, 
     return force, alpha
 
 
+def _interpolate(states: np.ndarray, k: int, frac: float) -> list[float]:
+    """``(1 − frac) · states[k] + frac · states[k + 1]`` as floats."""
+    weight = 1.0 - frac
+    return [weight * a + frac * b for a, b in zip(states[k].tolist(), states[k + 1].tolist(),
+                                                  strict=True)]
+
+
 class TrackingController:
     """Feed-forward + feedback plan tracker.
 
@@ -111,15 +119,17 @@ class TrackingController:
     ) -> ActuatorCommand:
         """Actuator command at time ``t_s`` [s] for the Frenet state ``x_frenet`` (6,)."""
         par, g = self.params, self.gains
-        x = np.asarray(x_frenet, dtype=float)
+        # Plain floats from here on (the same IEEE arithmetic as numpy's, element by element,
+        # without its per-operation overhead at the controller's rate).
+        x = np.asarray(x_frenet, dtype=float).tolist()
         n = plan.inputs.shape[0]
-        # min/max: np.clip's values on plain floats, without its per-call overhead.
+        # min/max: np.clip's values on plain floats.
         tau = float(min(max((t_s - plan.t0_s) / plan.dt_s, 0.0), n - 1e-9))
         k = int(tau)
-        frac = tau - k
-        x_ref = (1.0 - frac) * plan.states[k] + frac * plan.states[k + 1]
-        u = plan.inputs[k]
-        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(x_ref)) and np.all(np.isfinite(u))):
+        x_ref = _interpolate(plan.states, k, tau - k)
+        u = plan.inputs[k].tolist()
+        if not (all(map(math.isfinite, x)) and all(map(math.isfinite, x_ref))
+                and all(map(math.isfinite, u))):
             # Degrade, never raise: hold the wheel and brake gently.
             brake = -0.1 * par.mass_kg * 9.81 * par.wheel_radius_m
             return ActuatorCommand(float(steer_rad_now), 0.5 * brake, 0.5 * brake).clipped(par)
@@ -129,8 +139,7 @@ class TrackingController:
         # front force (counter-steer) must start before the plan's stage does.
         tau_p = min(max(tau + g.steer_preview_s / plan.dt_s, 0.0), n - 1e-9)
         k_p = int(tau_p)
-        frac_p = tau_p - k_p
-        x_p = (1.0 - frac_p) * plan.states[k_p] + frac_p * plan.states[k_p + 1]
+        x_p = _interpolate(plan.states, k_p, tau_p - k_p)
         mu_p = float(plan.mu_hat[k_p])
         alpha_f = front_slip_angle_for_force_rad(
             float(plan.inputs[k_p, Input.fyf]), float(plan.normal_load_front_n[k_p]), mu_p,
