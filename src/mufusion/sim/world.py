@@ -214,7 +214,6 @@ class World:
         x, y, psi = pose
         shift = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
         cx, cy = x + shift * math.cos(psi), y + shift * math.sin(psi)
-        s_c, _, _ = self._trackers.centre.to_frenet(cx, cy, psi)
         length, width, lane_width = params.length_m, params.width_m, self.road.lane_width_m
         corners = rectangle_corner_points(cx, cy, psi, length, width)
         corner_d = [
@@ -224,11 +223,14 @@ class World:
         clearance = math.inf
         passed = False
         any_active = False
+        s_c: float | None = None
         for obstacle, points in zip(self.road.obstacles, self._obstacle_points, strict=True):
             if not bool(obstacle_active(obstacle, s_ego_m, t_s)):
                 continue
             any_active = True
             clearance = min(clearance, signed_clearance_points(corners, points))
+            if s_c is None:  # the footprint's progress matters only next to an obstacle
+                s_c = self._trackers.centre.to_frenet(cx, cy, psi)[0]
             passed |= s_c - 0.5 * length > obstacle.s_m + 0.5 * obstacle.length_m
         mu_f, mu_r = self._mu_under_axles(pose, params)
         lanes = footprint_lane_margins(corner_d, lane_width)

@@ -55,8 +55,16 @@ N_STATES = len(State)
 N_INPUTS = len(Input)
 
 
+# Argument types that are never CasADi symbols (checked first: the roll-outs call often).
+_NUMERIC_TYPES = frozenset({np.ndarray, float, int, np.float64})
+
+
 def _is_symbolic(*values: Any) -> bool:
-    return any(type(v).__module__.startswith("casadi") for v in values)
+    for value in values:
+        kind = type(value)
+        if kind not in _NUMERIC_TYPES and kind.__module__.startswith("casadi"):
+            return True
+    return False
 
 
 def _ops(*values: Any):
