@@ -151,15 +151,15 @@ class PlantKernel:
         gxf, gyf, used_f, asked_f = unit_tire(kappa_f, alpha_f, mu_f, tire_f)
         gxr, gyr, used_r, asked_r = unit_tire(kappa_r, alpha_r, mu_r, tire_r)
         # Quasi-static pitch load transfer in closed form (axles.axle_outputs).
-        h = self.h
+        h, weight, min_denominator = self.h, self.weight, self.min_denominator
         g_front = gxf * cos_d - gyf * sin_d
         denominator = self.wheelbase + h * (g_front - gxr)
-        if self.min_denominator > denominator:
-            denominator = self.min_denominator
+        if min_denominator > denominator:
+            denominator = min_denominator
         accel = GRAVITY_MPS2 * (g_front * self.lr + gxr * self.lf) / denominator
-        fzf = self.weight * (self.g_lr - accel * h)
+        fzf = weight * (self.g_lr - accel * h)
         fzf = 0.0 if 0.0 > fzf else fzf
-        fzr = self.weight * (self.g_lf + accel * h)
+        fzr = weight * (self.g_lf + accel * h)
         fzr = 0.0 if 0.0 > fzr else fzr
         return (
             (gxf * fzf, gyf * fzf, fzf, kappa_f, alpha_f, used_f if fzf > 0.0 else 0.0,
@@ -169,11 +169,11 @@ class PlantKernel:
         )
 
     def rates(
-        self, state: tuple[float, ...], cos_d: float, sin_d: float,
-        front: AxleFloats, rear: AxleFloats, command: tuple[float, float, float],
+        self, psi: float, vx: float, vy: float, yaw_rate: float, steer: float, torque_f: float,
+        torque_r: float, cos_d: float, sin_d: float, front: AxleFloats, rear: AxleFloats,
+        command: tuple[float, float, float],
     ) -> tuple[float, ...]:
         """``plant._chassis_rates`` of a chassis state, without the wheel-spin rates."""
-        _, _, psi, vx, vy, yaw_rate, steer, torque_f, torque_r = state
         fx_f, fy_f, fx_r, fy_r = front[0], front[1], rear[0], rear[1]
         fx_front_body = fx_f * cos_d - fy_f * sin_d
         fy_front_body = fx_f * sin_d + fy_f * cos_d
@@ -182,7 +182,12 @@ class PlantKernel:
         steer_cmd, torque_f_cmd, torque_r_cmd = command
         max_rate = self.max_steer_rate
         steer_rate = (steer_cmd - steer) / self.steer_tau
-        steer_rate = min(max(steer_rate, -max_rate), max_rate)
+        # min(max(rate, -max_rate), max_rate)
+        if -max_rate > steer_rate:
+            steer_rate = -max_rate
+        if max_rate < steer_rate:
+            steer_rate = max_rate
+        torque_tau = self.torque_tau
         return (
             vx * cos_p - vy * sin_p,
             vx * sin_p + vy * cos_p,
@@ -191,8 +196,8 @@ class PlantKernel:
             (fy_front_body + fy_r) / m - vx * yaw_rate,
             (self.lf * fy_front_body - self.lr * fy_r) / self.yaw_inertia,
             steer_rate,
-            (torque_f_cmd - torque_f) / self.torque_tau,
-            (torque_r_cmd - torque_r) / self.torque_tau,
+            (torque_f_cmd - torque_f) / torque_tau,
+            (torque_r_cmd - torque_r) / torque_tau,
         )
 
     def chassis_step(
@@ -223,18 +228,20 @@ class PlantKernel:
                 speeds0, _follow_axle(omega_f0, u_f0, u_f0, radius),
                 _follow_axle(omega_r0, u_r0, u_r0, radius), mu_f, mu_r, tire_f, tire_r,
             )
-        k1 = rates(chassis0, speeds0[4], speeds0[5], *first_axles, command)
+        k1 = rates(psi0, vx0, vy0, r0, steer0, tf0, tr0, speeds0[4], speeds0[5], *first_axles,
+                   command)
 
         def stage(scale: float, k: tuple[float, ...]) -> tuple[float, ...]:
-            state = (0.0, 0.0, psi0 + scale * k[2], vx0 + scale * k[3], vy0 + scale * k[4],
-                     r0 + scale * k[5], steer0 + scale * k[6], tf0 + scale * k[7],
-                     tr0 + scale * k[8])
-            speeds = speeds_of(state[3], state[4], state[5], state[6])
+            # The state x₀ + scale · k (its position does not enter the rates).
+            vx, vy, r, steer = vx0 + scale * k[3], vy0 + scale * k[4], r0 + scale * k[5], (
+                steer0 + scale * k[6])
+            speeds = speeds_of(vx, vy, r, steer)
             front, rear = axles(
                 speeds, _follow_axle(omega_f0, speeds[0], u_f0, radius),
                 _follow_axle(omega_r0, speeds[2], u_r0, radius), mu_f, mu_r, tire_f, tire_r,
             )
-            return rates(state, speeds[4], speeds[5], front, rear, command)
+            return rates(psi0 + scale * k[2], vx, vy, r, steer, tf0 + scale * k[7],
+                         tr0 + scale * k[8], speeds[4], speeds[5], front, rear, command)
 
         half = 0.5 * dt
         k2 = stage(half, k1)
