@@ -7,6 +7,9 @@ import importlib.util
 import json
 import logging
 from collections.abc import Sequence
+from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -54,86 +57,20 @@ class AcadosBackend:
 
     def __init__(self, params: VehicleParams, config: PlannerConfig) -> None:
         at = load_acados_template()
-        import casadi as ca
-
         self.params, self.config = params, config
-        n, ns = config.horizon_steps, config.polygon_sides
+        n = config.horizon_steps
         digest = problem_hash(params, config)
         export = cache_dir() / f"tamp_{digest}"
-        json_file = export / "ocp.json"
         name = f"tamp_{digest}"
-
-        ocp = at.AcadosOcp()
-        model = at.AcadosModel()
-        model.name = name
-        x = ca.SX.sym("x", N_STATES)
-        u = ca.SX.sym("u", N_INPUTS)
-        p = ca.SX.sym("p", N_PARAMS)
-        model.x, model.u, model.p = x, u, p
-        model.xdot = ca.SX.sym("xdot", N_STATES)
-        f = frenet_bicycle_dynamics(x, u, p[Param.curvature], p[Param.rear_stiffness], params)
-        model.f_expl_expr = f
-        model.f_impl_expr = model.xdot - f
-        model.con_h_expr = constraint_expressions(x, u, p, params, ns)
-        ocp.model = model
-        ocp.dims.N = n
-        ocp.parameter_values = np.ones(N_PARAMS)
-
-        ny = N_STATES + N_INPUTS
-        ocp.cost.cost_type = "LINEAR_LS"
-        ocp.cost.cost_type_e = "LINEAR_LS"
-        ocp.cost.Vx = np.vstack([np.eye(N_STATES), np.zeros((N_INPUTS, N_STATES))])
-        ocp.cost.Vu = np.vstack([np.zeros((N_STATES, N_INPUTS)), np.eye(N_INPUTS)])
-        ocp.cost.Vx_e = np.eye(N_STATES)
-        ocp.cost.W = np.eye(ny)
-        ocp.cost.W_e = np.eye(N_STATES)
-        ocp.cost.yref = np.zeros(ny)
-        ocp.cost.yref_e = np.zeros(N_STATES)
-
-        ocp.constraints.x0 = np.array([0, 0, 0, 0, 10.0, 0])
-        ocp.constraints.idxbx = np.array([State.d, State.vx])
-        ocp.constraints.lbx = np.array([-1.0, 0.0])
-        ocp.constraints.ubx = np.array([1.0, MAX_SPEED_MPS])
-        ocp.constraints.idxsbx = np.array([0])
-        ocp.constraints.idxbx_e = np.array([State.d])
-        ocp.constraints.lbx_e = np.array([-1.0])
-        ocp.constraints.ubx_e = np.array([1.0])
-        ocp.constraints.idxsbx_e = np.array([0])
-        ocp.constraints.idxbu = np.array([Input.fxf, Input.fxr])
-        ocp.constraints.lbu, ocp.constraints.ubu = longitudinal_force_bounds_n(params)
-        self._ubu = np.array(ocp.constraints.ubu, dtype=float)
-        ocp.constraints.lh = np.full(2 * ns, POLYGON_ROW_LOWER_BOUND)
-        ocp.constraints.uh = np.zeros(2 * ns)
-        # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
-        # follows the state, which at stage 0 is fixed, so the rear polygon is soft. acados
-        # orders a stage's slacks as the soft bounds (d) first, then the soft h rows, which is
-        # the layout of SlackPenalties.
-        ocp.constraints.idxsh = np.arange(ns, 2 * ns)
-        penalties = slack_penalties(config.weights, ns)
-        ocp.cost.zl = ocp.cost.zu = penalties.linear_stage
-        ocp.cost.Zl = ocp.cost.Zu = penalties.quadratic_stage
-        ocp.cost.zl_e = ocp.cost.zu_e = penalties.linear_terminal
-        ocp.cost.Zl_e = ocp.cost.Zu_e = penalties.quadratic_terminal
-
-        so = ocp.solver_options
-        so.tf = n * config.dt_s
-        so.nlp_solver_type = "SQP_RTI"
-        so.qp_solver = "PARTIAL_CONDENSING_HPIPM"
-        so.qp_solver_cond_N = max(1, n // 4)
-        # SPEED mode halves the QP time here (1.1 vs 2.1 ms at N = 40) with the same closed loop.
-        so.hpipm_mode = "SPEED"
-        so.hessian_approx = "GAUSS_NEWTON"
-        so.integrator_type = "ERK"
-        so.sim_method_num_stages = 4
-        so.sim_method_num_steps = 1
-        so.qp_solver_iter_max = 50
-        ocp.code_export_directory = str(export)
+        self._ubu = np.array(longitudinal_force_bounds_n(params)[1], dtype=float)
 
         lib = export / "acados_ocp_solver_pyx.so"
         if not lib.exists():
+            # The problem description is needed only to generate the code (the hash names it).
             export.mkdir(parents=True, exist_ok=True)
             _log.info("generating and compiling the acados solver in %s", export)
-            at.AcadosOcpSolver.generate(ocp, json_file=str(json_file))
+            ocp = _describe(at, params, config, name, export)
+            at.AcadosOcpSolver.generate(ocp, json_file=str(export / "ocp.json"))
             at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
         # The template imports the wrapper by a cwd-relative module path; load it by file instead.
         spec = importlib.util.spec_from_file_location("acados_ocp_solver_pyx", lib)
@@ -228,3 +165,75 @@ class AcadosBackend:
         self.solver.reset(1)
 
 
+def _describe(
+    at: ModuleType, params: VehicleParams, config: PlannerConfig, name: str, export: Path
+) -> Any:
+    """The ``AcadosOcp`` description of the shared problem (for code generation)."""
+    import casadi as ca
+
+    n, ns = config.horizon_steps, config.polygon_sides
+    ocp = at.AcadosOcp()
+    model = at.AcadosModel()
+    model.name = name
+    x = ca.SX.sym("x", N_STATES)
+    u = ca.SX.sym("u", N_INPUTS)
+    p = ca.SX.sym("p", N_PARAMS)
+    model.x, model.u, model.p = x, u, p
+    model.xdot = ca.SX.sym("xdot", N_STATES)
+    f = frenet_bicycle_dynamics(x, u, p[Param.curvature], p[Param.rear_stiffness], params)
+    model.f_expl_expr = f
+    model.f_impl_expr = model.xdot - f
+    model.con_h_expr = constraint_expressions(x, u, p, params, ns)
+    ocp.model = model
+    ocp.dims.N = n
+    ocp.parameter_values = np.ones(N_PARAMS)
+
+    ny = N_STATES + N_INPUTS
+    ocp.cost.cost_type = "LINEAR_LS"
+    ocp.cost.cost_type_e = "LINEAR_LS"
+    ocp.cost.Vx = np.vstack([np.eye(N_STATES), np.zeros((N_INPUTS, N_STATES))])
+    ocp.cost.Vu = np.vstack([np.zeros((N_STATES, N_INPUTS)), np.eye(N_INPUTS)])
+    ocp.cost.Vx_e = np.eye(N_STATES)
+    ocp.cost.W = np.eye(ny)
+    ocp.cost.W_e = np.eye(N_STATES)
+    ocp.cost.yref = np.zeros(ny)
+    ocp.cost.yref_e = np.zeros(N_STATES)
+
+    ocp.constraints.x0 = np.array([0, 0, 0, 0, 10.0, 0])
+    ocp.constraints.idxbx = np.array([State.d, State.vx])
+    ocp.constraints.lbx = np.array([-1.0, 0.0])
+    ocp.constraints.ubx = np.array([1.0, MAX_SPEED_MPS])
+    ocp.constraints.idxsbx = np.array([0])
+    ocp.constraints.idxbx_e = np.array([State.d])
+    ocp.constraints.lbx_e = np.array([-1.0])
+    ocp.constraints.ubx_e = np.array([1.0])
+    ocp.constraints.idxsbx_e = np.array([0])
+    ocp.constraints.idxbu = np.array([Input.fxf, Input.fxr])
+    ocp.constraints.lbu, ocp.constraints.ubu = longitudinal_force_bounds_n(params)
+    ocp.constraints.lh = np.full(2 * ns, POLYGON_ROW_LOWER_BOUND)
+    ocp.constraints.uh = np.zeros(2 * ns)
+    # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
+    # follows the state, which at stage 0 is fixed, so the rear polygon is soft. acados
+    # orders a stage's slacks as the soft bounds (d) first, then the soft h rows, which is
+    # the layout of SlackPenalties.
+    ocp.constraints.idxsh = np.arange(ns, 2 * ns)
+    penalties = slack_penalties(config.weights, ns)
+    ocp.cost.zl = ocp.cost.zu = penalties.linear_stage
+    ocp.cost.Zl = ocp.cost.Zu = penalties.quadratic_stage
+    ocp.cost.zl_e = ocp.cost.zu_e = penalties.linear_terminal
+    ocp.cost.Zl_e = ocp.cost.Zu_e = penalties.quadratic_terminal
+
+    so = ocp.solver_options
+    so.tf = n * config.dt_s
+    so.nlp_solver_type = "SQP_RTI"
+    so.qp_solver = "PARTIAL_CONDENSING_HPIPM"
+    so.qp_solver_cond_N = max(1, n // 4)
+    # SPEED mode halves the QP time here (1.1 vs 2.1 ms at N = 40) with the same closed loop.
+    so.hpipm_mode = "SPEED"
+    so.hessian_approx = "GAUSS_NEWTON"
+    so.integrator_type = "ERK"
+    so.sim_method_num_stages = 4
+    so.sim_method_num_steps = 1
+    so.qp_solver_iter_max = 50
+    ocp.code_export_directory = str(export)
+    return ocp
