@@ -6,6 +6,10 @@ import hashlib
 import importlib.util
 import json
 import logging
+from collections.abc import Sequence
+from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -53,86 +57,20 @@ class AcadosBackend:
 
     def __init__(self, params: VehicleParams, config: PlannerConfig) -> None:
         at = load_acados_template()
-        import casadi as ca
-
         self.params, self.config = params, config
-        n, ns = config.horizon_steps, config.polygon_sides
+        n = config.horizon_steps
         digest = problem_hash(params, config)
         export = cache_dir() / f"tamp_{digest}"
-        json_file = export / "ocp.json"
         name = f"tamp_{digest}"
-
-        ocp = at.AcadosOcp()
-        model = at.AcadosModel()
-        model.name = name
-        x = ca.SX.sym("x", N_STATES)
-        u = ca.SX.sym("u", N_INPUTS)
-        p = ca.SX.sym("p", N_PARAMS)
-        model.x, model.u, model.p = x, u, p
-        model.xdot = ca.SX.sym("xdot", N_STATES)
-        f = frenet_bicycle_dynamics(x, u, p[Param.curvature], p[Param.rear_stiffness], params)
-        model.f_expl_expr = f
-        model.f_impl_expr = model.xdot - f
-        model.con_h_expr = constraint_expressions(x, u, p, params, ns)
-        ocp.model = model
-        ocp.dims.N = n
-        ocp.parameter_values = np.ones(N_PARAMS)
-
-        ny = N_STATES + N_INPUTS
-        ocp.cost.cost_type = "LINEAR_LS"
-        ocp.cost.cost_type_e = "LINEAR_LS"
-        ocp.cost.Vx = np.vstack([np.eye(N_STATES), np.zeros((N_INPUTS, N_STATES))])
-        ocp.cost.Vu = np.vstack([np.zeros((N_STATES, N_INPUTS)), np.eye(N_INPUTS)])
-        ocp.cost.Vx_e = np.eye(N_STATES)
-        ocp.cost.W = np.eye(ny)
-        ocp.cost.W_e = np.eye(N_STATES)
-        ocp.cost.yref = np.zeros(ny)
-        ocp.cost.yref_e = np.zeros(N_STATES)
-
-        ocp.constraints.x0 = np.array([0, 0, 0, 0, 10.0, 0])
-        ocp.constraints.idxbx = np.array([State.d, State.vx])
-        ocp.constraints.lbx = np.array([-1.0, 0.0])
-        ocp.constraints.ubx = np.array([1.0, MAX_SPEED_MPS])
-        ocp.constraints.idxsbx = np.array([0])
-        ocp.constraints.idxbx_e = np.array([State.d])
-        ocp.constraints.lbx_e = np.array([-1.0])
-        ocp.constraints.ubx_e = np.array([1.0])
-        ocp.constraints.idxsbx_e = np.array([0])
-        ocp.constraints.idxbu = np.array([Input.fxf, Input.fxr])
-        ocp.constraints.lbu, ocp.constraints.ubu = longitudinal_force_bounds_n(params)
-        self._ubu = np.array(ocp.constraints.ubu, dtype=float)
-        ocp.constraints.lh = np.full(2 * ns, POLYGON_ROW_LOWER_BOUND)
-        ocp.constraints.uh = np.zeros(2 * ns)
-        # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
-        # follows the state, which at stage 0 is fixed, so the rear polygon is soft. acados
-        # orders a stage's slacks as the soft bounds (d) first, then the soft h rows, which is
-        # the layout of SlackPenalties.
-        ocp.constraints.idxsh = np.arange(ns, 2 * ns)
-        penalties = slack_penalties(config.weights, ns)
-        ocp.cost.zl = ocp.cost.zu = penalties.linear_stage
-        ocp.cost.Zl = ocp.cost.Zu = penalties.quadratic_stage
-        ocp.cost.zl_e = ocp.cost.zu_e = penalties.linear_terminal
-        ocp.cost.Zl_e = ocp.cost.Zu_e = penalties.quadratic_terminal
-
-        so = ocp.solver_options
-        so.tf = n * config.dt_s
-        so.nlp_solver_type = "SQP_RTI"
-        so.qp_solver = "PARTIAL_CONDENSING_HPIPM"
-        so.qp_solver_cond_N = max(1, n // 4)
-        # SPEED mode halves the QP time here (1.1 vs 2.1 ms at N = 40) with the same closed loop.
-        so.hpipm_mode = "SPEED"
-        so.hessian_approx = "GAUSS_NEWTON"
-        so.integrator_type = "ERK"
-        so.sim_method_num_stages = 4
-        so.sim_method_num_steps = 1
-        so.qp_solver_iter_max = 50
-        ocp.code_export_directory = str(export)
+        self._ubu = np.array(longitudinal_force_bounds_n(params)[1], dtype=float)
 
         lib = export / "acados_ocp_solver_pyx.so"
         if not lib.exists():
+            # The problem description is needed only to generate the code (the hash names it).
             export.mkdir(parents=True, exist_ok=True)
             _log.info("generating and compiling the acados solver in %s", export)
-            at.AcadosOcpSolver.generate(ocp, json_file=str(json_file))
+            ocp = _describe(at, params, config, name, export)
+            at.AcadosOcpSolver.generate(ocp, json_file=str(export / "ocp.json"))
             at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
         # The template imports the wrapper by a cwd-relative module path; load it by file instead.
         spec = importlib.util.spec_from_file_location("acados_ocp_solver_pyx", lib)
@@ -141,6 +79,8 @@ class AcadosBackend:
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
         self.solver = module.AcadosOcpSolverCython(name, "SQP_RTI", n)
+        # What solve() last wrote per problem field (stage rows), to skip unchanged stages.
+        self._written: dict[str, np.ndarray] = {}
 
     def solve(
         self,
@@ -166,27 +106,55 @@ class AcadosBackend:
             ubu[1] = min(ubu[1], max_drive_force_n)
         s.set(0, "lbx", x0)
         s.set(0, "ubx", x0)
-        w_stage = np.diag(weights[: N_STATES + N_INPUTS])
         for k in range(n):
             s.set(k, "x", guess_x[k])
             s.set(k, "u", guess_u[k])
-            s.set(k, "p", p[k])
-            s.cost_set(k, "yref", yref[k])
-            s.cost_set(k, "W", w_stage)
-            s.constraints_set(k, "ubu", ubu)
-            if k > 0:
-                s.constraints_set(k, "lbx", np.array([d_lo[k - 1], min_speed_mps]))
-                s.constraints_set(k, "ubx", np.array([d_hi[k - 1], MAX_SPEED_MPS]))
         s.set(n, "x", guess_x[n])
-        s.set(n, "p", p[n - 1])
-        s.cost_set(n, "yref", yref[n][:N_STATES])
-        s.cost_set(n, "W", w_stage[:N_STATES, :N_STATES])
-        s.constraints_set(n, "lbx", np.array([d_lo[n - 1]]))
-        s.constraints_set(n, "ubx", np.array([d_hi[n - 1]]))
+        # The problem data below often repeat from one step to the next (weights and drive
+        # bound per mode, references on a straight, parameters of a uniform road): only the
+        # stages whose values changed are written.
+        self._update("p", s.set, p[:n], range(n))
+        self._update("p_terminal", s.set, p[n - 1 : n], (n,))
+        self._update("yref", s.cost_set, yref[:n], range(n))
+        self._update("yref_terminal", s.cost_set, yref[n:, :N_STATES], (n,))
+        w_stage = np.diag(weights[: N_STATES + N_INPUTS])
+        self._update("W", s.cost_set, w_stage[None], range(n))
+        self._update("W_terminal", s.cost_set, w_stage[None, :N_STATES, :N_STATES], (n,))
+        self._update("ubu", s.constraints_set, ubu[None], range(n))
+        lbx = np.empty((n, 2))
+        lbx[:, 0], lbx[:, 1] = d_lo, min_speed_mps
+        ubx = np.empty((n, 2))
+        ubx[:, 0], ubx[:, 1] = d_hi, MAX_SPEED_MPS
+        self._update("lbx", s.constraints_set, lbx[:-1], range(1, n))
+        self._update("ubx", s.constraints_set, ubx[:-1], range(1, n))
+        self._update("lbx_terminal", s.constraints_set, lbx[-1:, :1], (n,))
+        self._update("ubx_terminal", s.constraints_set, ubx[-1:, :1], (n,))
         status = s.solve()
         xs = np.array([s.get(k, "x") for k in range(n + 1)])
         us = np.array([s.get(k, "u") for k in range(n)])
         return int(status), xs, us
+
+    def _update(self, key: str, setter, values: np.ndarray, stages: Sequence[int]) -> None:
+        """Write ``values[i]`` to ``stages[i]`` where it differs from what was written last.
+
+        One row of ``values`` for several stages writes it to each of them. The solver keeps
+        problem data until overwritten (``reset`` clears iterates only), so skipping an
+        unchanged stage leaves the solve exactly as if it were written again.
+        """
+        field = key.removesuffix("_terminal")
+        # Forgotten until every write succeeded: after an error, everything is written again.
+        previous = self._written.pop(key, None)
+        if previous is None or previous.shape != values.shape:
+            rows = range(len(stages))
+        elif len(values) == 1:
+            rows = range(len(stages)) if np.any(values != previous) else range(0)
+        else:
+            differs = (values != previous).reshape(len(stages), -1)
+            rows = np.flatnonzero(differs.any(axis=1)).tolist()
+        uniform = len(values) == 1
+        for i in rows:
+            setter(stages[i], field, values[0 if uniform else i])
+        self._written[key] = values.copy()
 
     def reset(self) -> None:
         """Zero every iterate (primal, dual, slacks) and the QP solver's memory.
@@ -197,3 +165,75 @@ class AcadosBackend:
         self.solver.reset(1)
 
 
+def _describe(
+    at: ModuleType, params: VehicleParams, config: PlannerConfig, name: str, export: Path
+) -> Any:
+    """The ``AcadosOcp`` description of the shared problem (for code generation)."""
+    import casadi as ca
+
+    n, ns = config.horizon_steps, config.polygon_sides
+    ocp = at.AcadosOcp()
+    model = at.AcadosModel()
+    model.name = name
+    x = ca.SX.sym("x", N_STATES)
+    u = ca.SX.sym("u", N_INPUTS)
+    p = ca.SX.sym("p", N_PARAMS)
+    model.x, model.u, model.p = x, u, p
+    model.xdot = ca.SX.sym("xdot", N_STATES)
+    f = frenet_bicycle_dynamics(x, u, p[Param.curvature], p[Param.rear_stiffness], params)
+    model.f_expl_expr = f
+    model.f_impl_expr = model.xdot - f
+    model.con_h_expr = constraint_expressions(x, u, p, params, ns)
+    ocp.model = model
+    ocp.dims.N = n
+    ocp.parameter_values = np.ones(N_PARAMS)
+
+    ny = N_STATES + N_INPUTS
+    ocp.cost.cost_type = "LINEAR_LS"
+    ocp.cost.cost_type_e = "LINEAR_LS"
+    ocp.cost.Vx = np.vstack([np.eye(N_STATES), np.zeros((N_INPUTS, N_STATES))])
+    ocp.cost.Vu = np.vstack([np.zeros((N_STATES, N_INPUTS)), np.eye(N_INPUTS)])
+    ocp.cost.Vx_e = np.eye(N_STATES)
+    ocp.cost.W = np.eye(ny)
+    ocp.cost.W_e = np.eye(N_STATES)
+    ocp.cost.yref = np.zeros(ny)
+    ocp.cost.yref_e = np.zeros(N_STATES)
+
+    ocp.constraints.x0 = np.array([0, 0, 0, 0, 10.0, 0])
+    ocp.constraints.idxbx = np.array([State.d, State.vx])
+    ocp.constraints.lbx = np.array([-1.0, 0.0])
+    ocp.constraints.ubx = np.array([1.0, MAX_SPEED_MPS])
+    ocp.constraints.idxsbx = np.array([0])
+    ocp.constraints.idxbx_e = np.array([State.d])
+    ocp.constraints.lbx_e = np.array([-1.0])
+    ocp.constraints.ubx_e = np.array([1.0])
+    ocp.constraints.idxsbx_e = np.array([0])
+    ocp.constraints.idxbu = np.array([Input.fxf, Input.fxr])
+    ocp.constraints.lbu, ocp.constraints.ubu = longitudinal_force_bounds_n(params)
+    ocp.constraints.lh = np.full(2 * ns, POLYGON_ROW_LOWER_BOUND)
+    ocp.constraints.uh = np.zeros(2 * ns)
+    # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
+    # follows the state, which at stage 0 is fixed, so the rear polygon is soft. acados
+    # orders a stage's slacks as the soft bounds (d) first, then the soft h rows, which is
+    # the layout of SlackPenalties.
+    ocp.constraints.idxsh = np.arange(ns, 2 * ns)
+    penalties = slack_penalties(config.weights, ns)
+    ocp.cost.zl = ocp.cost.zu = penalties.linear_stage
+    ocp.cost.Zl = ocp.cost.Zu = penalties.quadratic_stage
+    ocp.cost.zl_e = ocp.cost.zu_e = penalties.linear_terminal
+    ocp.cost.Zl_e = ocp.cost.Zu_e = penalties.quadratic_terminal
+
+    so = ocp.solver_options
+    so.tf = n * config.dt_s
+    so.nlp_solver_type = "SQP_RTI"
+    so.qp_solver = "PARTIAL_CONDENSING_HPIPM"
+    so.qp_solver_cond_N = max(1, n // 4)
+    # SPEED mode halves the QP time here (1.1 vs 2.1 ms at N = 40) with the same closed loop.
+    so.hpipm_mode = "SPEED"
+    so.hessian_approx = "GAUSS_NEWTON"
+    so.integrator_type = "ERK"
+    so.sim_method_num_stages = 4
+    so.sim_method_num_steps = 1
+    so.qp_solver_iter_max = 50
+    ocp.code_export_directory = str(export)
+    return ocp

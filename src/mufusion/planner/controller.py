@@ -10,6 +10,8 @@ The command is rate-limited and clipped to the actuators' ranges.
 
 from __future__ import annotations
 
+import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,14 +51,34 @@ def front_slip_angle_for_force_rad(
     Stiffness ``cornering_stiffness_per_load × F_z``, peak ``μ̂ F_z`` (TireParams' convention).
     """
     fz, mu = max(normal_load_n, 1.0), max(mu_hat, 0.05)
+    force, alpha = _rising_branch(fz, mu, tire)
+    magnitude = float(np.interp(abs(force_n), force, alpha))
+    return float(np.sign(force_n)) * magnitude
+
+
+@functools.lru_cache(maxsize=64)
+def _rising_branch(fz: float, mu: float, tire: TireParams) -> tuple[np.ndarray, np.ndarray]:
+    """Tabulated force and slip angle up to the peak, at one load, friction and tire.
+
+    Cached: the controller previews one plan stage for several ticks in a row, so the same
+    (load, μ̂) comes back until the plan's next stage or the next plan.
+    """
     c = tire.shape_lateral
     b = tire.cornering_stiffness_per_load_1_per_rad / (c * mu)
     # The force rises monotonically up to the peak at C·atan(...) = π/2; tabulate up to there.
     alpha = np.linspace(0.0, 3.0 / b, 400)
     force = _magic_formula_lateral(alpha, fz, mu, tire)
     peak = int(np.argmax(force))
-    magnitude = float(np.interp(abs(force_n), force[: peak + 1], alpha[: peak + 1]))
-    return float(np.sign(force_n)) * magnitude
+    force, alpha = force[: peak + 1], alpha[: peak + 1]
+    force.flags.writeable = alpha.flags.writeable = False
+    return force, alpha
+
+
+def _interpolate(states: np.ndarray, k: int, frac: float) -> list[float]:
+    """``(1 − frac) · states[k] + frac · states[k + 1]`` as floats."""
+    weight = 1.0 - frac
+    return [weight * a + frac * b for a, b in zip(states[k].tolist(), states[k + 1].tolist(),
+                                                  strict=True)]
 
 
 class TrackingController:
@@ -97,14 +119,17 @@ class TrackingController:
     ) -> ActuatorCommand:
         """Actuator command at time ``t_s`` [s] for the Frenet state ``x_frenet`` (6,)."""
         par, g = self.params, self.gains
-        x = np.asarray(x_frenet, dtype=float)
+        # Plain floats from here on (the same IEEE arithmetic as numpy's, element by element,
+        # without its per-operation overhead at the controller's rate).
+        x = np.asarray(x_frenet, dtype=float).tolist()
         n = plan.inputs.shape[0]
-        tau = float(np.clip((t_s - plan.t0_s) / plan.dt_s, 0.0, n - 1e-9))
+        # min/max: np.clip's values on plain floats.
+        tau = float(min(max((t_s - plan.t0_s) / plan.dt_s, 0.0), n - 1e-9))
         k = int(tau)
-        frac = tau - k
-        x_ref = (1.0 - frac) * plan.states[k] + frac * plan.states[k + 1]
-        u = plan.inputs[k]
-        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(x_ref)) and np.all(np.isfinite(u))):
+        x_ref = _interpolate(plan.states, k, tau - k)
+        u = plan.inputs[k].tolist()
+        if not (all(map(math.isfinite, x)) and all(map(math.isfinite, x_ref))
+                and all(map(math.isfinite, u))):
             # Degrade, never raise: hold the wheel and brake gently.
             brake = -0.1 * par.mass_kg * 9.81 * par.wheel_radius_m
             return ActuatorCommand(float(steer_rad_now), 0.5 * brake, 0.5 * brake).clipped(par)
@@ -112,10 +137,9 @@ class TrackingController:
         vx = max(x[State.vx], MIN_SPEED_FOR_SLIP_MPS)
         # The feed-forward previews the plan by the steering's lag: a planned reversal of the
         # front force (counter-steer) must start before the plan's stage does.
-        tau_p = float(np.clip(tau + g.steer_preview_s / plan.dt_s, 0.0, n - 1e-9))
+        tau_p = min(max(tau + g.steer_preview_s / plan.dt_s, 0.0), n - 1e-9)
         k_p = int(tau_p)
-        frac_p = tau_p - k_p
-        x_p = (1.0 - frac_p) * plan.states[k_p] + frac_p * plan.states[k_p + 1]
+        x_p = _interpolate(plan.states, k_p, tau_p - k_p)
         mu_p = float(plan.mu_hat[k_p])
         alpha_f = front_slip_angle_for_force_rad(
             float(plan.inputs[k_p, Input.fyf]), float(plan.normal_load_front_n[k_p]), mu_p,
@@ -135,8 +159,8 @@ class TrackingController:
         delta = delta_ff + delta_fb
         max_step = par.max_steer_rate_radps / g.rate_hz
         prev = steer_rad_now if self._last_steer_cmd_rad is None else self._last_steer_cmd_rad
-        delta = float(np.clip(delta, prev - max_step, prev + max_step))
-        delta = float(np.clip(delta, -par.max_steer_rad, par.max_steer_rad))
+        delta = float(min(max(delta, prev - max_step), prev + max_step))
+        delta = min(max(delta, -par.max_steer_rad), par.max_steer_rad)
         self._last_steer_cmd_rad = delta
 
         extra_force = par.mass_kg * g.speed_1_per_s * (x_ref[State.vx] - vx)

@@ -9,6 +9,7 @@ from these pieces only, and implement :class:`~mufusion.planner.backend.PlannerB
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import IntEnum
@@ -209,13 +210,17 @@ def longitudinal_force_bounds_n(params: VehicleParams) -> tuple[np.ndarray, np.n
     return lower, upper
 
 
+@functools.lru_cache(maxsize=8)
 def polygon_directions(n_sides: int) -> tuple[np.ndarray, float]:
     """Outward normals ``(n, 2)`` over ``(F_x, F_y)`` and the inscribed-radius ratio ``cos(π/n)``.
 
     A regular n-gon inscribed in the circle of radius R is ``{f : n_j · f ≤ R cos(π/n)}``.
+    Cached (every solution check uses them); the normals are read-only.
     """
     theta = 2.0 * np.pi * np.arange(n_sides) / n_sides
-    return np.stack([np.cos(theta), np.sin(theta)], axis=1), float(np.cos(np.pi / n_sides))
+    normals = np.stack([np.cos(theta), np.sin(theta)], axis=1)
+    normals.flags.writeable = False
+    return normals, float(np.cos(np.pi / n_sides))
 
 
 def stage_parameters(

@@ -89,6 +89,9 @@ def sanitize_mu(
     ([0.8, 0.1, 2.0, 0.05], 3)
     """
     raw = np.asarray(raw, dtype=float)
+    if raw.size and MU_MIN <= raw.min() and raw.max() <= MU_MAX:
+        # The usual case (NaN fails both comparisons): nothing to replace or clip.
+        return raw.copy(), 0
     bad = ~np.isfinite(raw) | (raw <= 0.0)
     with np.errstate(invalid="ignore"):
         clipped = ~bad & ((raw < MU_MIN) | (raw > MU_MAX))
@@ -160,7 +163,7 @@ def check_solution(
         ``NONE``, ``NON_FINITE`` or ``IMPLAUSIBLE``.
     """
     xs, us = np.asarray(states, dtype=float), np.asarray(inputs, dtype=float)
-    if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(us))):
+    if not (np.isfinite(xs).all() and np.isfinite(us).all()):
         return FallbackReason.NON_FINITE
     normals, ratio = polygon_directions(n_sides)
     front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
@@ -169,23 +172,23 @@ def check_solution(
     lower, upper = longitudinal_force_bounds_n(params)
     slack = limits.force_bound_tolerance * np.maximum(np.abs(lower), np.abs(upper))
     fx = us[:, [Input.fxf, Input.fxr]]
+    vx, d, dpsi = xs[:, State.vx], xs[1:, State.d], xs[:, State.dpsi]
     reasons = {
-        "front polygon": np.any(
+        "front polygon": (
             front > (ratio + limits.front_polygon_tolerance) * stage["radius_front"]
-        ),
-        "rear polygon": np.any(
+        ).any(),
+        "rear polygon": (
             rear > (ratio + limits.rear_polygon_tolerance) * stage["radius_rear"]
-        ),
-        "longitudinal force bounds": np.any((fx < lower - slack) | (fx > upper + slack)),
-        "speed": np.any(
-            (xs[:, State.vx] < -limits.speed_tolerance_mps)
-            | (xs[:, State.vx] > MAX_SPEED_MPS + limits.speed_tolerance_mps)
-        ),
-        "corridor": np.any(
-            (xs[1:, State.d] < d_lo - limits.corridor_tolerance_m)
-            | (xs[1:, State.d] > d_hi + limits.corridor_tolerance_m)
-        ),
-        "heading error": np.any(np.abs(xs[:, State.dpsi]) > limits.max_heading_error_rad),
+        ).any(),
+        "longitudinal force bounds": ((fx < lower - slack) | (fx > upper + slack)).any(),
+        "speed": (
+            (vx < -limits.speed_tolerance_mps)
+            | (vx > MAX_SPEED_MPS + limits.speed_tolerance_mps)
+        ).any(),
+        "corridor": (
+            (d < d_lo - limits.corridor_tolerance_m) | (d > d_hi + limits.corridor_tolerance_m)
+        ).any(),
+        "heading error": (np.abs(dpsi) > limits.max_heading_error_rad).any(),
     }
     failed = [name for name, bad in reasons.items() if bad]
     if failed:

@@ -162,12 +162,14 @@ def candidate_rollouts(
         # Saturate at the friction limits (longitudinal first, lateral gets what remains).
         limit_f = utilization_factor * mu * fzf
         limit_r = utilization_factor * mu * fzr
-        fxf = np.clip(fxf, np.maximum(lower[0], -0.8 * limit_f), upper[0])
-        fxr = np.clip(
-            fxr, np.maximum(lower[1], -0.8 * limit_r), np.minimum(upper[1], 0.8 * limit_r)
+        # np.minimum(np.maximum(...)) is np.clip's definition, at a fraction of its overhead.
+        fxf = np.minimum(np.maximum(fxf, np.maximum(lower[0], -0.8 * limit_f)), upper[0])
+        fxr = np.minimum(
+            np.maximum(fxr, np.maximum(lower[1], -0.8 * limit_r)),
+            np.minimum(upper[1], 0.8 * limit_r),
         )
         lat_room = np.sqrt(np.maximum(limit_f**2 - fxf**2, 0.0)) * 0.95
-        fyf = np.clip(fyf, -lat_room, lat_room)
+        fyf = np.minimum(np.maximum(fyf, -lat_room), lat_room)
         u = np.stack([fyf, fxf, fxr])
         u[Input.fyf], u[Input.fxf], u[Input.fxr] = fyf, fxf, fxr
         x = rk4_step(x, u, kappa, c_r, params, dt_s)

@@ -27,11 +27,12 @@ from mufusion.road.obstacles import (
 )
 from mufusion.road.path import PathSegment, ReferencePath
 from mufusion.road.road import Road, straight_road, turn_road
-from mufusion.road.tracking import PointTracker
+from mufusion.road.tracking import FrictionTracker, PointTracker
 
 __all__ = [
     "DEFAULT_LANE_WIDTH_M",
     "FrictionMap",
+    "FrictionTracker",
     "LaneMargins",
     "Obstacle",
     "PathSegment",

@@ -99,7 +99,10 @@ class FrictionMap:
             μ, the broadcast shape of the arguments.
         """
         s = np.asarray(s_m, dtype=float)
-        index = np.clip(np.searchsorted(self.start_s_m, s, side="right") - 1, 0, len(self.mu) - 1)
+        # np.minimum/np.maximum: np.clip's result at a fraction of its per-call overhead.
+        index = np.minimum(
+            np.maximum(np.searchsorted(self.start_s_m, s, side="right") - 1, 0), len(self.mu) - 1
+        )
         ego = np.asarray(self.mu)[index]
         if self.mu_opposing is None or d_m is None:
             return ego

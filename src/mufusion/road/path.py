@@ -153,6 +153,11 @@ class ReferencePath:
         ]
         self._py_gauss = list(zip(_GL_NODES.tolist(), _GL_WEIGHTS.tolist(), strict=True))
 
+    @property
+    def max_abs_curvature_1pm(self) -> float:
+        """Largest |κ| along the path [1/m] (0 for a straight)."""
+        return self._max_abs_curvature
+
     # --- curvature and heading: closed form per segment -------------------------------------
     def _segment_index(self, s: np.ndarray) -> np.ndarray:
         index = np.searchsorted(self._seg_start, s, side="right") - 1

@@ -9,10 +9,12 @@ which is the abrupt change the sampling augmentation exists for.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from mufusion.configurations import Configuration, make_configuration
 from mufusion.estimators import class_table, local_timing
@@ -95,6 +97,10 @@ def run_scenario(
     ------
     ValueError
         If ``configuration`` is unknown.
+
+    Notes
+    -----
+    The run limits the BLAS thread pools (OpenBLAS of numpy and scipy) to one thread.
     """
     configuration = Configuration.parse(configuration)
     params = vehicle_preset(cfg.vehicle)
@@ -136,7 +142,17 @@ def run_scenario(
         utilization_factor=planner.config.utilization_factor,
         meta=run_meta(cfg, configuration, params, road, planner.config),
     )
-    return loop.run(cfg.duration_s, progress=progress, warmup_steps=WARMUP_PLANNING_STEPS)
+    # One BLAS thread: the fusion's small matrix products gain nothing from a thread pool, and
+    # on a busy machine its spinning threads made runs several times slower.
+    with _blas_controller().limit(limits=1, user_api="blas"):
+        return loop.run(cfg.duration_s, progress=progress, warmup_steps=WARMUP_PLANNING_STEPS)
+
+
+@functools.cache
+def _blas_controller() -> ThreadpoolController:
+    # Scanning the loaded libraries costs milliseconds; numpy's and scipy's BLAS are loaded by
+    # the time the first run starts, so one scan serves every run of the process.
+    return ThreadpoolController()
 
 
 def _planner_obstacle(o: Obstacle) -> PlannerObstacle:

@@ -337,7 +337,7 @@ class ClosedLoop:
         plan: Plan | None,
         estimate: FrictionEstimate,
     ) -> ActuatorCommand:
-        curvature = float(self.world.curvature(np.array([float(xf[State.s])]))[0])
+        curvature = self.world.curvature_at(float(xf[State.s]))
         if plan is not None and not (self._minimal_risk and not self._planner_usable):
             try:
                 command = self.controller.command(

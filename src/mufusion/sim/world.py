@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from mufusion.road import (
+    FrictionTracker,
     Obstacle,
     PointTracker,
     Road,
@@ -77,12 +78,13 @@ class FootprintStatus:
 
 @dataclass(frozen=True)
 class _Trackers:
-    """Warm starts of the projections of the vehicle's points that move with it."""
+    """Warm starts of the projections of the vehicle's points that move with it (the axles'
+    only for the friction under them)."""
 
     cog: PointTracker
     centre: PointTracker
-    front_axle: PointTracker
-    rear_axle: PointTracker
+    front_axle: FrictionTracker
+    rear_axle: FrictionTracker
     corners: tuple[PointTracker, ...]
 
 
@@ -90,9 +92,11 @@ class _Trackers:
 class World:
     """A road and the conversion of plant states into what the planner and metrics need.
 
-    The projections of the vehicle's points (centre of gravity, axles, footprint centre and
-    corners) start from where each point was projected last (one :class:`PointTracker` each):
-    the only state a world holds, and it does not change any result beyond rounding.
+    The projections of the vehicle's points (centre of gravity, footprint centre and corners)
+    start from where each point was projected last (one :class:`PointTracker` each); the axles
+    are projected only when the friction under them could have changed
+    (:class:`~mufusion.road.tracking.FrictionTracker`). That is the only state a world holds,
+    and it does not change any result beyond rounding.
 
     Parameters
     ----------
@@ -112,7 +116,8 @@ class World:
     def __post_init__(self) -> None:
         path = self.road.path
         object.__setattr__(self, "_trackers", _Trackers(
-            PointTracker(path), PointTracker(path), PointTracker(path), PointTracker(path),
+            PointTracker(path), PointTracker(path),
+            FrictionTracker(path, self.road.friction), FrictionTracker(path, self.road.friction),
             tuple(PointTracker(path) for _ in range(4)),
         ))
         # Obstacles do not move: their corners once, as plain floats for the per-tick clearance.
@@ -174,10 +179,8 @@ class World:
         c, s = math.cos(psi), math.sin(psi)
         front_x, front_y = x + params.cog_to_front_axle_m * c, y + params.cog_to_front_axle_m * s
         rear_x, rear_y = x - params.cog_to_rear_axle_m * c, y - params.cog_to_rear_axle_m * s
-        s_f, d_f, _ = self._trackers.front_axle.to_frenet(front_x, front_y)
-        s_r, d_r, _ = self._trackers.rear_axle.to_frenet(rear_x, rear_y)
-        friction = self.road.friction
-        return friction.mu_at_point(s_f, d_f), friction.mu_at_point(s_r, d_r)
+        return (self._trackers.front_axle.mu_at(front_x, front_y),
+                self._trackers.rear_axle.mu_at(rear_x, rear_y))
 
     def active_obstacles(self, t_s: float, s_ego_m: float) -> list[Obstacle]:
         return [o for o in self.road.obstacles if bool(obstacle_active(o, s_ego_m, t_s))]
@@ -211,7 +214,6 @@ class World:
         x, y, psi = pose
         shift = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
         cx, cy = x + shift * math.cos(psi), y + shift * math.sin(psi)
-        s_c, _, _ = self._trackers.centre.to_frenet(cx, cy, psi)
         length, width, lane_width = params.length_m, params.width_m, self.road.lane_width_m
         corners = rectangle_corner_points(cx, cy, psi, length, width)
         corner_d = [
@@ -221,11 +223,14 @@ class World:
         clearance = math.inf
         passed = False
         any_active = False
+        s_c: float | None = None
         for obstacle, points in zip(self.road.obstacles, self._obstacle_points, strict=True):
             if not bool(obstacle_active(obstacle, s_ego_m, t_s)):
                 continue
             any_active = True
             clearance = min(clearance, signed_clearance_points(corners, points))
+            if s_c is None:  # the footprint's progress matters only next to an obstacle
+                s_c = self._trackers.centre.to_frenet(cx, cy, psi)[0]
             passed |= s_c - 0.5 * length > obstacle.s_m + 0.5 * obstacle.length_m
         mu_f, mu_r = self._mu_under_axles(pose, params)
         lanes = footprint_lane_margins(corner_d, lane_width)

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from mufusion.vehicle.params import VehicleParams
 
 
@@ -28,16 +26,34 @@ class ActuatorCommand:
 
     def clipped(self, params: VehicleParams) -> ActuatorCommand:
         """The same command limited to the actuators' ranges (never beyond what they can do)."""
-        return ActuatorCommand(
-            steer_rad=float(np.clip(self.steer_rad, -params.max_steer_rad, params.max_steer_rad)),
-            torque_front_nm=float(
-                np.clip(self.torque_front_nm, -params.max_brake_torque_front_nm, 0.0)
-            ),
-            torque_rear_nm=float(
-                np.clip(
-                    self.torque_rear_nm,
-                    -params.max_brake_torque_rear_nm,
-                    params.max_drive_torque_nm,
-                )
-            ),
-        )
+        # min/max on plain floats: the same values as np.clip (NaN passes through), without
+        # numpy's per-call overhead (this runs at the plant's and the controller's rates).
+        return ActuatorCommand(*clip_command(
+            self.steer_rad, self.torque_front_nm, self.torque_rear_nm, params
+        ))
+
+
+def clip_command(
+    steer_rad: float, torque_front_nm: float, torque_rear_nm: float, params: VehicleParams
+) -> tuple[float, float, float]:
+    """``(steer, front torque, rear torque)`` limited to the actuators' ranges, as floats.
+
+    Examples
+    --------
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> clip_command(0.0, 500.0, -1e9, TRUCK) == (0.0, 0.0, -TRUCK.max_brake_torque_rear_nm)
+    True
+    """
+    steer_max = params.max_steer_rad
+    return (
+        _clip(float(steer_rad), -steer_max, steer_max),
+        _clip(float(torque_front_nm), -params.max_brake_torque_front_nm, 0.0),
+        _clip(float(torque_rear_nm), -params.max_brake_torque_rear_nm,
+              params.max_drive_torque_nm),
+    )
+
+
+def _clip(value: float, low: float, high: float) -> float:
+    # As np.clip(value, low, high) for low <= high, NaN included (max/min keep their first
+    # argument when a comparison with NaN is false).
+    return min(max(value, low), high)

@@ -55,8 +55,16 @@ N_STATES = len(State)
 N_INPUTS = len(Input)
 
 
+# Argument types that are never CasADi symbols (checked first: the roll-outs call often).
+_NUMERIC_TYPES = frozenset({np.ndarray, float, int, np.float64})
+
+
 def _is_symbolic(*values: Any) -> bool:
-    return any(type(v).__module__.startswith("casadi") for v in values)
+    for value in values:
+        kind = type(value)
+        if kind not in _NUMERIC_TYPES and kind.__module__.startswith("casadi"):
+            return True
+    return False
 
 
 def _ops(*values: Any):
@@ -65,7 +73,16 @@ def _ops(*values: Any):
         import casadi as ca
 
         return ca.sin, ca.cos, ca.fmax, lambda parts: ca.vertcat(*parts)
-    return np.sin, np.cos, np.maximum, lambda parts: np.stack(np.broadcast_arrays(*parts))
+    return np.sin, np.cos, np.maximum, _stack_numpy
+
+
+def _stack_numpy(parts: list[Any]) -> np.ndarray:
+    """``np.stack(np.broadcast_arrays(*parts))``, without the intermediate views (the sampling
+    roll-outs call the dynamics a few hundred times per planning step)."""
+    out = np.empty((len(parts), *np.broadcast(*parts).shape), dtype=np.result_type(*parts))
+    for i, part in enumerate(parts):
+        out[i] = part
+    return out
 
 
 def rear_cornering_stiffness_n_per_rad(

@@ -28,16 +28,16 @@ from typing import Any
 
 import numpy as np
 
-from mufusion.vehicle.actuators import ActuatorCommand
+from mufusion.vehicle.actuators import ActuatorCommand, clip_command
 from mufusion.vehicle.axles import (
     SLIP_SPEED_FLOOR_MPS,
     AxleOutput,
     axle_forces,
     axle_outputs,
     check_mu,
-    wheel_speeds,
 )
 from mufusion.vehicle.params import TireParams, VehicleParams
+from mufusion.vehicle.plant_kernel import AxleFloats, PlantKernel
 from mufusion.vehicle.plant_state import (
     N_PLANT_STATES,
     PlantState,
@@ -47,7 +47,6 @@ from mufusion.vehicle.plant_state import (
     state_vector,
 )
 from mufusion.vehicle.surface_tires import SurfaceTireTable, tire_for_surface
-from mufusion.vehicle.tires import tire_forces_scalar
 
 __all__ = [
     "BRAKE_SIGN_SMOOTHING_RADPS",
@@ -69,8 +68,6 @@ __all__ = [
 # scheme of :class:`Plant` treats the brake as exact Coulomb friction instead.
 BRAKE_SIGN_SMOOTHING_RADPS = 0.5
 DEFAULT_DT_S = 1.0 / 200.0
-# Step of the finite difference dF_x/dκ in the implicit wheel update [-].
-_SLIP_DIFFERENCE_STEP = 1e-5
 
 
 @dataclass(frozen=True)
@@ -107,16 +104,17 @@ class PlantOutput:
 
 
 def _command_tuple(command: Any, params: VehicleParams) -> tuple[float, float, float]:
-    if not isinstance(command, ActuatorCommand):
-        values = np.asarray(command, dtype=float).reshape(-1)
-        if values.shape != (3,):
-            raise ValueError(
-                "command must be an ActuatorCommand or [steer_rad, torque_front_nm, "
-                f"torque_rear_nm], got shape {values.shape}"
-            )
-        command = ActuatorCommand(float(values[0]), float(values[1]), float(values[2]))
-    clipped = command.clipped(params)
-    return clipped.steer_rad, clipped.torque_front_nm, clipped.torque_rear_nm
+    if isinstance(command, ActuatorCommand):
+        return clip_command(
+            command.steer_rad, command.torque_front_nm, command.torque_rear_nm, params
+        )
+    values = np.asarray(command, dtype=float).reshape(-1)
+    if values.shape != (3,):
+        raise ValueError(
+            "command must be an ActuatorCommand or [steer_rad, torque_front_nm, "
+            f"torque_rear_nm], got shape {values.shape}"
+        )
+    return clip_command(float(values[0]), float(values[1]), float(values[2]), params)
 
 
 def _chassis_rates(
@@ -227,11 +225,6 @@ def plant_derivative(
     return np.asarray(rates)
 
 
-def _follow_axle(omega0: float, speed1: float, speed0: float, radius: float) -> float:
-    """Wheel spin that keeps the slip ratio while the axle's speed goes ``speed0 → speed1``."""
-    return max(omega0 + (speed1 - speed0) / radius, 0.0) if omega0 > 0.0 else 0.0
-
-
 class Plant:
     """Integrates the plant at a fixed rate and reports what the sensors and metrics need.
 
@@ -288,6 +281,9 @@ class Plant:
         self.dt_s = float(dt_s)
         self._x = state_vector(x0)
         self.time_s = 0.0
+        self._kernel = PlantKernel(params, self.dt_s)
+        # (μ_f, μ_r, axles) of the latest output, reused by the next step's first stage.
+        self._last_axles: tuple[float, float, tuple[AxleFloats, AxleFloats]] | None = None
 
     @property
     def x(self) -> np.ndarray:
@@ -322,96 +318,45 @@ class Plant:
             If a μ is not > 0.
         """
         check_mu(mu_front, mu_rear)
-        p, dt = self.params, self.dt_s
-        radius = p.wheel_radius_m
+        p = self.params
         cmd = _command_tuple(command, p)
         x0 = self._x
-        u_f0, _, u_r0, _ = wheel_speeds(x0, p)
+        omega_f0, omega_r0 = x0.omega_front_radps, x0.omega_rear_radps
         # The surface under each axle is held over the step (μ is too).
-        tires = (tire_for_surface(mu_front, p.tire, self.surface_tires),
-                 tire_for_surface(mu_rear, p.tire, self.surface_tires))
-
-        def stage(x: PlantStateVector) -> PlantStateVector:
-            u_f, _, u_r, _ = wheel_speeds(x, p)
-            front, rear = axle_outputs(
-                x,
-                _follow_axle(x0.omega_front_radps, u_f, u_f0, radius),
-                _follow_axle(x0.omega_rear_radps, u_r, u_r0, radius),
-                mu_front, mu_rear, p, *tires,
-            )
-            return _chassis_rates(x, front, rear, cmd, p)
-
-        make = PlantStateVector._make
-        k1 = stage(x0)
-        k2 = stage(make(a + 0.5 * dt * b for a, b in zip(x0, k1, strict=True)))
-        k3 = stage(make(a + 0.5 * dt * b for a, b in zip(x0, k2, strict=True)))
-        k4 = stage(make(a + dt * b for a, b in zip(x0, k3, strict=True)))
-        chassis = make(
-            a + dt / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
-            for a, b1, b2, b3, b4 in zip(x0, k1, k2, k3, k4, strict=True)
+        tire_f = tire_for_surface(mu_front, p.tire, self.surface_tires)
+        tire_r = tire_for_surface(mu_rear, p.tire, self.surface_tires)
+        last = self._last_axles
+        # The previous output evaluated the first stage's axles already if μ is unchanged and
+        # both wheels spin forwards (the stage's wheel prediction ω₀ + (u₀ − u₀)/R is then ω₀).
+        first = last[2] if last is not None and last[:2] == (mu_front, mu_rear) else None
+        kernel = self._kernel
+        chassis, u_f0, u_r0 = kernel.chassis_step(
+            x0[:6] + x0[8:], omega_f0, omega_r0, cmd, mu_front, mu_rear, tire_f, tire_r, first
         )
-        omega_front, omega_rear = self._implicit_wheels(
-            x0, chassis, u_f0, u_r0, mu_front, mu_rear, tires
+        omega_f, omega_r = kernel.implicit_wheels(
+            chassis, omega_f0, omega_r0, u_f0, u_r0, mu_front, mu_rear, tire_f, tire_r
         )
-        x1 = chassis._replace(omega_front_radps=omega_front, omega_rear_radps=omega_rear)
+        x1 = PlantStateVector(*chassis[:6], omega_f, omega_r, *chassis[6:])
         self._x = x1
-        self.time_s += dt
-        return self._output(x1, mu_front, mu_rear, tires)
-
-    def _implicit_wheels(
-        self,
-        x0: PlantStateVector,
-        x1: PlantStateVector,
-        u_f0: float,
-        u_r0: float,
-        mu_f: float,
-        mu_r: float,
-        tires: tuple[TireParams, TireParams],
-    ) -> tuple[float, float]:
-        """Linearly implicit Euler step of both wheel spins at the new chassis state ``x1``."""
-        p, dt = self.params, self.dt_s
-        radius, inertia = p.wheel_radius_m, p.wheel_inertia_kgm2
-        u_f1, _, u_r1, _ = wheel_speeds(x1, p)
-        predicted_f = _follow_axle(x0.omega_front_radps, u_f1, u_f0, radius)
-        predicted_r = _follow_axle(x0.omega_rear_radps, u_r1, u_r0, radius)
-        front, rear = axle_outputs(x1, predicted_f, predicted_r, mu_f, mu_r, p, *tires)
-        new = []
-        for omega0, predicted, torque, axle, tire in (
-            (x0.omega_front_radps, predicted_f, x1.torque_front_nm, front, tires[0]),
-            (x0.omega_rear_radps, predicted_r, x1.torque_rear_nm, rear, tires[1]),
-        ):
-            # Tangent stiffness dF_x/dω (clamped at 0 beyond the peak) for the implicit step.
-            fx_plus, _, _, _ = tire_forces_scalar(
-                axle.slip_ratio + _SLIP_DIFFERENCE_STEP, axle.slip_angle_rad, axle.fz_n, axle.mu,
-                tire,
-            )
-            slope = (
-                max((fx_plus - axle.fx_n) / _SLIP_DIFFERENCE_STEP, 0.0)
-                * radius / axle.slip_speed_mps
-            )
-            effective = inertia + dt * radius * slope
-            drive, brake = max(torque, 0.0), max(-torque, 0.0)
-            free = (
-                inertia * omega0 + dt * (drive - radius * axle.fx_n + radius * slope * predicted)
-            ) / effective
-            hold = dt * brake / effective
-            if free > hold:
-                new.append(free - hold)
-            elif free < -hold:
-                new.append(free + hold)
-            else:
-                new.append(0.0)
-        return new[0], new[1]
+        self.time_s += self.dt_s
+        return self._output(x1, mu_front, mu_rear, tire_f, tire_r)
 
     def _output(
-        self, x: PlantStateVector, mu_f: float, mu_r: float, tires: tuple[TireParams, TireParams]
+        self, x: PlantStateVector, mu_f: float, mu_r: float, tire_f: TireParams,
+        tire_r: TireParams,
     ) -> PlantOutput:
-        p = self.params
-        front, rear = axle_outputs(
-            x, x.omega_front_radps, x.omega_rear_radps, mu_f, mu_r, p, *tires
+        kernel = self._kernel
+        speeds = kernel.wheel_speeds(x.vx_mps, x.vy_mps, x.yaw_rate_radps, x.steer_rad)
+        axles = kernel.axles(
+            speeds, x.omega_front_radps, x.omega_rear_radps, mu_f, mu_r, tire_f, tire_r
         )
-        cos_d, sin_d = math.cos(x.steer_rad), math.sin(x.steer_rad)
-        m = p.mass_kg
+        self._last_axles = (
+            (mu_f, mu_r, axles) if x.omega_front_radps > 0.0 and x.omega_rear_radps > 0.0
+            else None
+        )
+        front, rear = AxleOutput(*axles[0], mu_f), AxleOutput(*axles[1], mu_r)
+        cos_d, sin_d = speeds[4], speeds[5]
+        m = self.params.mass_kg
         return PlantOutput(
             x=np.asarray(x),
             time_s=self.time_s,
