@@ -16,8 +16,8 @@ import csv
 import json
 import sys
 
+from mufusion.campaign import CampaignFile, campaign_specs, load_campaign
 from mufusion.scenarios import load_scenario
-from mufusion.scenarios.campaign import CampaignFile, campaign_specs, load_campaign
 from mufusion.scenarios.feasibility import classify_scenario
 from mufusion.vehicle.params import vehicle_preset
 

@@ -25,12 +25,12 @@ from pathlib import Path
 
 import numpy as np
 
+from mufusion.campaign import campaign_specs, load_campaign, run_campaign
 from mufusion.planner.ocp import lateral_corridor
 from mufusion.road.geometry import rectangle_corners
-from mufusion.scenarios.campaign import campaign_specs, load_campaign, run_campaign
-from mufusion.scenarios.config import load_scenario
+from mufusion.scenarios import TurnScenario, load_scenario
+from mufusion.scenarios.config import planner_lane_bounds_m
 from mufusion.scenarios.feasibility import classify_scenario
-from mufusion.scenarios.runner import build_road, planner_lane_bounds_m
 from mufusion.sim.log import load_run
 from mufusion.vehicle.params import vehicle_preset
 from mufusion.vehicle.planner_model import State
@@ -41,10 +41,12 @@ CORNERS = ("front-left", "front-right", "rear-right", "rear-left")
 def diagnose(directory: Path, overrides: list[str]) -> dict:
     """The quantities of the module docstring for one GT run's log."""
     cfg = load_scenario("turn", overrides)
+    if not isinstance(cfg, TurnScenario):
+        raise ValueError("the diagnosis is for the turn scenario")
     par = vehicle_preset(cfg.vehicle)
     log = load_run(directory)
     ts, plans = log.timeseries, log.plans
-    road, s0 = build_road(cfg, par)
+    road, s0 = cfg.build_road(par), cfg.start_s_m
     curve_start = s0 + cfg.turn.start_ahead_m
     arc_start = curve_start + cfg.turn.clothoid_m
     curve_end = curve_start + cfg.turn.radius_m * cfg.turn.angle_rad + cfg.turn.clothoid_m
@@ -114,8 +116,8 @@ def main(argv: list[str] | None = None) -> int:
              and all(w in s.overrides for w in args.where)]
     out = Path(args.out)
     if not args.reuse:
-        run_campaign(specs, out, jobs=args.jobs)
-    rows = [diagnose(out / spec.slug, list(spec.overrides)) for spec in specs]
+        run_campaign(specs, out / "runs", jobs=args.jobs)
+    rows = [diagnose(out / "runs" / spec.name, spec.all_overrides) for spec in specs]
     keys = list(rows[0])
     width = {k: max(len(k), *(len(str(r[k])) for r in rows)) for k in keys}
     print(" ".join(f"{k:>{width[k]}}" for k in keys))
