@@ -144,6 +144,7 @@ class AcadosBackend:
         field = key.removesuffix("_terminal")
         # Forgotten until every write succeeded: after an error, everything is written again.
         previous = self._written.pop(key, None)
+        rows: Sequence[int]
         if previous is None or previous.shape != values.shape:
             rows = range(len(stages))
         elif len(values) == 1:

@@ -349,7 +349,7 @@ class Plant:
         omega_f, omega_r = kernel.implicit_wheels(
             chassis, omega_f0, omega_r0, u_f0, u_r0, mu_front, mu_rear, tire_f, tire_r
         )
-        x1 = PlantStateVector(*chassis[:6], omega_f, omega_r, *chassis[6:])
+        x1 = PlantStateVector._make([*chassis[:6], omega_f, omega_r, *chassis[6:]])
         self._x = x1
         self.time_s += self.dt_s
         return self._output(x1, mu_front, mu_rear, tire_f, tire_r)
