@@ -31,6 +31,7 @@ from threadpoolctl import threadpool_limits
 
 from mufusion.configurations import FrictionConfiguration
 from mufusion.planner import TrackingController, TractionAdaptivePlanner
+from mufusion.planner.acados_backend import AcadosBackend
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
 from mufusion.sim.log import RunLog
@@ -40,8 +41,10 @@ from mufusion.sim.world import World
 from mufusion.vehicle.plant import Plant
 
 SCENARIOS = ("turn", "popup")
-STAGES = ("plant", "planner", "controller", "estimation+fusion", "geometry/world", "logging",
-          "loop/other", "setup")
+# The planner's time is split into its own Python, the acados backend's Python (writing the
+# problem, reading the plan) and the acados solve itself (C).
+STAGES = ("plant", "planner", "acados backend", "acados solve (C)", "controller",
+          "estimation+fusion", "geometry/world", "logging", "loop/other", "setup")
 
 
 class StageClock:
@@ -80,6 +83,16 @@ def _public_methods(cls: type) -> Iterator[str]:
             yield name
 
 
+class _TimedSolver:
+    """The generated acados solver with its ``solve`` timed (the other calls pass through)."""
+
+    def __init__(self, solver: Any, clock: StageClock) -> None:
+        self.solve = clock.wrap("acados solve (C)", solver.solve)
+        self.set, self.cost_set = solver.set, solver.cost_set
+        self.constraints_set, self.get, self.reset = (
+            solver.constraints_set, solver.get, solver.reset)
+
+
 @contextmanager
 def instrumented(clock: StageClock) -> Iterator[None]:
     """Wrap the components' methods with the clock for the duration of the block."""
@@ -88,6 +101,7 @@ def instrumented(clock: StageClock) -> Iterator[None]:
         (TractionAdaptivePlanner, "step", "planner"),
         (TrackingController, "command", "controller"),
         (ClosedLoop, "run", "loop/other"),
+        (AcadosBackend, "solve", "acados backend"),
     ]
     configurations = [FrictionConfiguration]
     while configurations:
@@ -99,7 +113,15 @@ def instrumented(clock: StageClock) -> Iterator[None]:
     targets += [(Recorder, name, "logging") for name in ("tick", "planning_step", "event")]
     targets += [(RunLog, "frame", "logging")]
     saved = [(cls, name, vars(cls)[name]) for cls, name, _ in targets]
+    saved.append((AcadosBackend, "__init__", AcadosBackend.__init__))
+    backend_init = AcadosBackend.__init__
+
+    def timed_init(self: AcadosBackend, *args: Any, **kwargs: Any) -> None:
+        backend_init(self, *args, **kwargs)
+        self.solver = _TimedSolver(self.solver, clock)
+
     try:
+        AcadosBackend.__init__ = timed_init  # type: ignore[method-assign]
         for cls, name, stage in targets:
             original = vars(cls)[name]
             if isinstance(original, staticmethod):

@@ -254,6 +254,11 @@ class Plant:
     ValueError
         If ``dt_s`` is not in (0, 1/200] or ``x0`` has the wrong shape.
 
+    Notes
+    -----
+    The step's arithmetic runs in :mod:`mufusion.vehicle.plant_kernel`, which reads the
+    vehicle's constants and ``dt_s`` once, here.
+
     Examples
     --------
     >>> from mufusion.vehicle.params import CAR
@@ -282,8 +287,11 @@ class Plant:
         self._x = state_vector(x0)
         self.time_s = 0.0
         self._kernel = PlantKernel(params, self.dt_s)
-        # (μ_f, μ_r, axles) of the latest output, reused by the next step's first stage.
-        self._last_axles: tuple[float, float, tuple[AxleFloats, AxleFloats]] | None = None
+        # (μ_f, μ_r, tire_f, tire_r, axles) of the latest output, reused by the next step's
+        # first stage.
+        self._last_axles: (
+            tuple[float, float, TireParams, TireParams, tuple[AxleFloats, AxleFloats]] | None
+        ) = None
 
     @property
     def x(self) -> np.ndarray:
@@ -326,9 +334,14 @@ class Plant:
         tire_f = tire_for_surface(mu_front, p.tire, self.surface_tires)
         tire_r = tire_for_surface(mu_rear, p.tire, self.surface_tires)
         last = self._last_axles
-        # The previous output evaluated the first stage's axles already if μ is unchanged and
-        # both wheels spin forwards (the stage's wheel prediction ω₀ + (u₀ − u₀)/R is then ω₀).
-        first = last[2] if last is not None and last[:2] == (mu_front, mu_rear) else None
+        # The previous output evaluated the first stage's axles already if μ and the tires are
+        # unchanged and both wheels spin forwards (the stage's wheel prediction
+        # ω₀ + (u₀ − u₀)/R is then ω₀).
+        first = None
+        if last is not None and last[0] == mu_front and last[1] == mu_rear and (
+            last[2] is tire_f and last[3] is tire_r
+        ):
+            first = last[4]
         kernel = self._kernel
         chassis, u_f0, u_r0 = kernel.chassis_step(
             x0[:6] + x0[8:], omega_f0, omega_r0, cmd, mu_front, mu_rear, tire_f, tire_r, first
@@ -336,7 +349,7 @@ class Plant:
         omega_f, omega_r = kernel.implicit_wheels(
             chassis, omega_f0, omega_r0, u_f0, u_r0, mu_front, mu_rear, tire_f, tire_r
         )
-        x1 = PlantStateVector._make((*chassis[:6], omega_f, omega_r, *chassis[6:]))
+        x1 = PlantStateVector._make([*chassis[:6], omega_f, omega_r, *chassis[6:]])
         self._x = x1
         self.time_s += self.dt_s
         return self._output(x1, mu_front, mu_rear, tire_f, tire_r)
@@ -351,8 +364,8 @@ class Plant:
             speeds, x.omega_front_radps, x.omega_rear_radps, mu_f, mu_r, tire_f, tire_r
         )
         self._last_axles = (
-            (mu_f, mu_r, axles) if x.omega_front_radps > 0.0 and x.omega_rear_radps > 0.0
-            else None
+            (mu_f, mu_r, tire_f, tire_r, axles)
+            if x.omega_front_radps > 0.0 and x.omega_rear_radps > 0.0 else None
         )
         front, rear = AxleOutput(*axles[0], mu_f), AxleOutput(*axles[1], mu_r)
         cos_d, sin_d = speeds[4], speeds[5]
