@@ -426,7 +426,7 @@ def _print_table(rows: list[dict]) -> None:
     from mufusion.metrics import TABLE_COLUMNS, format_cell
 
     table = Table(title="outcome (full names and all metrics in summary.json)")
-    cols = [c for c in TABLE_COLUMNS if any(c.key in r for r in rows)]
+    cols = [c for c in TABLE_COLUMNS if c.terminal and any(c.key in r for r in rows)]
     for col in cols:
         table.add_column(col.header, overflow="fold")
     for r in rows:

@@ -15,23 +15,25 @@ class TableColumn:
     key: str
     header: str
     format: CellFormat = "number"
+    terminal: bool = True
+    """Also in the terminal's table (kept readable at 80 columns); reports show every column."""
 
 
 TABLE_COLUMNS: tuple[TableColumn, ...] = (
-    TableColumn("scenario", "scenario", "text"),
+    TableColumn("scenario", "scenario", "text", terminal=False),
     TableColumn("variant", "variant", "text"),
     TableColumn("config", "cfg", "text"),
-    TableColumn("feasibility", "physics", "text"),
+    TableColumn("feasibility", "physics", "text", terminal=False),
     TableColumn("collision", "crash", "yes/no"),
-    TableColumn("impact_speed_mps", "impact m/s"),
+    TableColumn("impact_speed_mps", "hit m/s"),
     TableColumn("min_clearance_m", "clear m"),
-    TableColumn("max_lane_excursion_m", "out of lane cm", "cm"),
+    TableColumn("max_lane_excursion_m", "out cm", "cm"),
     TableColumn("time_outside_lane_s", "out s"),
-    TableColumn("max_opposing_lane_depth_m", "opp. lane cm", "cm"),
-    TableColumn("spun", "spun", "yes/no"),
+    TableColumn("max_opposing_lane_depth_m", "opp cm", "cm"),
+    TableColumn("spun", "spun", "yes/no", terminal=False),
     TableColumn("utilization_vs_gt", "util vs GT %", "percent"),
-    TableColumn("max_force_excess", "F excess %", "percent"),
-    TableColumn("fallbacks", "fallbacks", "number"),
+    TableColumn("max_force_excess", "F excess %", "percent", terminal=False),
+    TableColumn("fallbacks", "fallbacks", "number", terminal=False),
 )
 """Columns of the outcome table (summary.json has the full names and every metric)."""
 
