@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
+import json
+import signal
+import subprocess
+import time
+from pathlib import Path
+
 import pytest
 
-from mufusion.campaign import (
-    CampaignInterrupted,
-    campaign_specs,
-    execute_campaign,
-    load_campaign,
-)
 from mufusion.campaign.engines import dispatch
 from mufusion.campaign.stats import WALL_CLOCK_SUFFIX
+from processes import isolated, mufusion_command, wait_until_session_empty
 
 CAMPAIGN = """
 scenarios = ["popup"]
@@ -22,8 +23,9 @@ overrides = ["duration_s=1.5", "estimation.local_error=random",
 """
 
 
-def _deterministic(metrics) -> dict:
-    return {k: v for k, v in metrics.to_dict().items() if not k.endswith(WALL_CLOCK_SUFFIX)}
+def _metrics(directory: Path) -> dict:
+    metrics = json.loads((directory / "result.json").read_text())["metrics"]
+    return {k: v for k, v in metrics.items() if not k.endswith(WALL_CLOCK_SUFFIX)}
 
 
 def _log_files(directory) -> dict[str, bytes]:
@@ -33,21 +35,38 @@ def _log_files(directory) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in directory.iterdir() if p.name not in skip}
 
 
+def _run_directories(out: Path) -> dict[str, Path]:
+    return {p.name: p for p in (out / "runs").iterdir()}
+
+
+def _campaign(tmp_path: Path, seeds: int) -> Path:
+    path = tmp_path / "c.toml"
+    path.write_text(CAMPAIGN.replace("seeds = 3", f"seeds = {seeds}"))
+    return path
+
+
+# Ray runs in a child process in its own session: the local instance's raylet, GCS and workers
+# are then the command's to start and stop, and the test can check that none of them outlives it.
 @pytest.mark.slow
 def test_pool_and_local_ray_give_identical_runs_for_the_same_seeds(tmp_path):
-    path = tmp_path / "c.toml"
-    path.write_text(CAMPAIGN)
-    specs = campaign_specs(load_campaign(path))
-    pool = execute_campaign(specs, tmp_path / "pool", engine="pool", jobs=2)
-    ray = execute_campaign(specs, tmp_path / "ray", engine="ray", jobs=2)
-    assert [r.error for r in pool + ray] == [None] * 6
-    for a, b in zip(pool, ray, strict=True):
-        assert a.spec == b.spec and a.seed == b.seed
-        assert _deterministic(a.metrics) == _deterministic(b.metrics)
-        assert _log_files(a.directory) == _log_files(b.directory)
+    path = _campaign(tmp_path, seeds=3)
+    outs = {}
+    for engine in ("pool", "ray"):
+        outs[engine] = tmp_path / engine
+        cmd = mufusion_command("campaign", str(path), "--out", str(outs[engine]), "--jobs", "2",
+                               "--engine", engine)
+        with isolated(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
+            output, _ = proc.communicate(timeout=300)
+            assert proc.returncode == 0, output
+            assert wait_until_session_empty(proc.pid, timeout_s=30.0) == []
+    pool, ray = (_run_directories(outs[e]) for e in ("pool", "ray"))
+    assert sorted(pool) == sorted(ray) and len(pool) == 3
+    for name in pool:
+        assert _log_files(pool[name]) == _log_files(ray[name]), name
+        assert _metrics(pool[name]) == _metrics(ray[name]), name
     # The seeds reach the random error models: different seeds, different estimates.
-    estimates = {r.seed: (r.directory / "estimates.csv").read_bytes() for r in pool}
-    assert len(set(estimates.values())) == 3
+    estimates = {(d / "estimates.csv").read_bytes() for d in pool.values()}
+    assert len(estimates) == 3
 
 
 @pytest.mark.parametrize(
@@ -64,18 +83,24 @@ def test_dispatch_rejects_bad_options(kwargs, match):
 
 
 @pytest.mark.slow
-def test_ctrl_c_cancels_the_ray_tasks_and_shuts_the_local_instance_down(tmp_path):
-    import ray
-
-    path = tmp_path / "c.toml"
-    path.write_text(CAMPAIGN.replace("seeds = 3", "seeds = 6"))
-    specs = campaign_specs(load_campaign(path))
-
-    def interrupt(_spec):
-        raise KeyboardInterrupt
-
-    with pytest.raises(CampaignInterrupted) as stop:
-        execute_campaign(specs, tmp_path / "runs", engine="ray", jobs=2, on_done=interrupt)
-    assert len(stop.value.finished) == 1 and len(stop.value.pending) == 5
-    assert not ray.is_initialized()
-    assert [p.name for p in (tmp_path / "runs").iterdir()] == [stop.value.finished[0].spec.name]
+def test_sigint_stops_a_ray_campaign_and_its_local_instance(tmp_path):
+    out = tmp_path / "out"
+    cmd = mufusion_command("campaign", str(_campaign(tmp_path, seeds=40)), "--out", str(out),
+                           "--jobs", "2", "--engine", "ray")
+    with isolated(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
+        deadline = time.monotonic() + 180.0
+        while time.monotonic() < deadline and proc.poll() is None:
+            if (out / "runs").is_dir() and any(not p.name.startswith(".")
+                                               for p in (out / "runs").iterdir()):
+                break
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+        output, _ = proc.communicate(timeout=120)
+        assert proc.returncode == 130, output
+        # The local Ray instance (raylet, GCS, workers) went down with the command.
+        assert wait_until_session_empty(proc.pid, timeout_s=30.0) == [], output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["partial"] is True and 1 <= summary["completed"] < 40
+    assert summary["completed"] + summary["pending"] == 40
+    assert "--resume" in output
+    assert sorted(_run_directories(out)) == sorted(r["run"] for r in summary["runs"])

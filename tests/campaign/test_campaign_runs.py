@@ -5,10 +5,8 @@ from __future__ import annotations
 
 import json
 import multiprocessing
-import os
 import signal
 import subprocess
-import sys
 import time
 
 import pytest
@@ -21,6 +19,7 @@ from mufusion.campaign import (
     run_campaign,
 )
 from mufusion.campaign.storage import publish_run, read_result
+from processes import isolated, mufusion_command, wait_until_session_empty
 
 SHORT = ("duration_s=1.0",)
 
@@ -81,27 +80,27 @@ def test_run_campaign_returns_triples_and_raises_naming_failed_runs(tmp_path, mo
 
 @pytest.mark.slow
 def test_sigint_to_the_command_stops_it_with_a_partial_summary(tmp_path):
+    # Enough runs that the campaign cannot finish between the first published run and the
+    # signal, even on a fast machine (about 0.2 s per run on two cores here).
     file = tmp_path / "c.toml"
-    file.write_text('scenarios = ["popup"]\nconfigs = ["GT", "F"]\nseeds = 10\n'
+    file.write_text('scenarios = ["popup"]\nconfigs = ["GT", "F"]\nseeds = 100\n'
                     'overrides = ["duration_s=1.5", "estimation.local_error=random"]\n')
     out = tmp_path / "out"
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
-    cmd = [sys.executable, "-m", "mufusion", "campaign", str(file), "--out", str(out),
-           "--jobs", "2"]
-    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True)
-    deadline = time.monotonic() + 120.0
-    while time.monotonic() < deadline and proc.poll() is None:
-        if (out / "runs").is_dir() and any(not p.name.startswith(".") for p in
-                                           (out / "runs").iterdir()):
-            break
-        time.sleep(0.05)
-    proc.send_signal(signal.SIGINT)
-    output, _ = proc.communicate(timeout=60)
-    assert proc.returncode == 130, output
+    cmd = mufusion_command("campaign", str(file), "--out", str(out), "--jobs", "2")
+    with isolated(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
+        deadline = time.monotonic() + 120.0
+        while time.monotonic() < deadline and proc.poll() is None:
+            if (out / "runs").is_dir() and any(not p.name.startswith(".") for p in
+                                               (out / "runs").iterdir()):
+                break
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+        output, _ = proc.communicate(timeout=60)
+        assert proc.returncode == 130, output
+        assert wait_until_session_empty(proc.pid, timeout_s=30.0) == []  # workers stopped
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["partial"] is True and 1 <= summary["completed"] < 20
-    assert summary["completed"] + summary["pending"] == 20
+    assert summary["partial"] is True and 1 <= summary["completed"] < 200
+    assert summary["completed"] + summary["pending"] == 200
     assert "--resume" in output
     names = sorted(p.name for p in (out / "runs").iterdir())
     assert names == sorted(r["run"] for r in summary["runs"])  # no half-written directory
