@@ -6,11 +6,13 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mufusion.planner.ocp import PlannerConfig
 from mufusion.planner.planner import TractionAdaptivePlanner
 from mufusion.planner.speed_profile import curve_speed_reference_mps, max_speed_profile_mps
-from mufusion.vehicle.params import TRUCK
+from mufusion.vehicle.params import GRAVITY_MPS2, TRUCK
 from mufusion.vehicle.planner_model import State
 
 ARC_START_M = 30.0
@@ -107,3 +109,33 @@ def test_plan_enters_the_arc_at_the_speed_it_can_hold(planners) -> None:
     # Tracking the cruise speed alone, the plans brake as late as their horizon allows and the
     # vehicle reaches the arc far above what it can hold there (11.4 m/s when this was written).
     assert v_without > v_with + 1.0
+
+
+def _textbook_profile(s, kappa, mu, accel_fraction, end_speed):
+    """The recursion written out on numpy arrays (what the fast pass must reproduce bit for bit)."""
+    kappa = np.abs(kappa)
+    accel = accel_fraction * mu * GRAVITY_MPS2
+    u = np.minimum(np.where(kappa > 0.0, accel / np.maximum(kappa, 1e-300), np.inf),
+                   end_speed**2)
+    for i in range(s.size - 2, -1, -1):
+        lateral = u[i + 1] * max(kappa[i], kappa[i + 1])
+        braking = np.sqrt(max(accel[i] ** 2 - lateral**2, 0.0))
+        u[i] = min(u[i], u[i + 1] + 2.0 * braking * (s[i + 1] - s[i]))
+    return np.sqrt(u)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    steps=st.lists(st.floats(0.1, 3.0), min_size=1, max_size=120),
+    data=st.data(),
+    end_speed=st.floats(1.0, 40.0),
+)
+def test_profile_equals_the_textbook_recursion_bit_for_bit(steps, data, end_speed):
+    n = len(steps)
+    s = np.cumsum(steps)
+    kappa = np.array(data.draw(st.lists(st.sampled_from([0.0, 1 / 25, -1 / 60, 1 / 150]),
+                                        min_size=n, max_size=n)))
+    mu = np.array(data.draw(st.lists(st.floats(0.05, 1.2), min_size=n, max_size=n)))
+    with np.errstate(divide="ignore"):
+        expected = _textbook_profile(s, kappa, mu, 0.9, end_speed)
+    np.testing.assert_array_equal(max_speed_profile_mps(s, kappa, mu, 0.9, end_speed), expected)

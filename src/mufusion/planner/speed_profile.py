@@ -78,14 +78,20 @@ def max_speed_profile_mps(
     accel = accel_fraction * mu_arr * GRAVITY_MPS2
     with np.errstate(divide="ignore"):
         limit = np.where(kappa > 0.0, accel / np.maximum(kappa, 1e-300), np.inf)
-    u = np.minimum(limit, end_speed_mps**2)
+    # The backward pass is sequential; on Python floats it runs ~4x faster than on numpy
+    # scalars, with the same IEEE operations in the same order and ``min``/``max``'s
+    # argument semantics (identical results, NaN included).
+    u = np.minimum(limit, end_speed_mps**2).tolist()
+    k_list, a_list, s_list = kappa.tolist(), accel.tolist(), s.tolist()
+    u_next, k_next, s_next = u[-1], k_list[-1], s_list[-1]
     for i in range(s.size - 2, -1, -1):
-        k = max(kappa[i], kappa[i + 1])
-        a = accel[i]
-        lateral = u[i + 1] * k
+        k_i, s_i, a = k_list[i], s_list[i], a_list[i]
+        lateral = u_next * (k_next if k_next > k_i else k_i)  # max(k_i, k_next)
         braking = math.sqrt(max(a * a - lateral * lateral, 0.0))
-        u[i] = min(u[i], u[i + 1] + 2.0 * braking * (s[i + 1] - s[i]))
-    return np.sqrt(u)
+        reachable = u_next + 2.0 * braking * (s_next - s_i)
+        u_next = u[i] = reachable if reachable < u[i] else u[i]  # min(u[i], reachable)
+        k_next, s_next = k_i, s_i
+    return np.sqrt(np.array(u))
 
 
 def curve_speed_reference_mps(
