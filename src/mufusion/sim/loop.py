@@ -32,6 +32,7 @@ from mufusion.sim.estimate_guard import EstimateGuard
 from mufusion.sim.faults import Fault, active_kinds, estimate_delay_s
 from mufusion.sim.log import RunLog
 from mufusion.sim.minimal_risk import minimal_risk_command
+from mufusion.sim.obstacle_response import ObstacleResponse, obstacle_mode
 from mufusion.sim.recorder import Recorder
 from mufusion.sim.records import RunMeta
 from mufusion.sim.supervision import (
@@ -83,6 +84,9 @@ class ClosedLoop:
         How the loop reacts to missing, stale or failing parts.
     probing, lane_recovery
         The supervisory behaviours of :mod:`mufusion.sim.supervision` (beyond the paper).
+    obstacle_response
+        Stop in front of an obstacle where possible, else evade
+        (:mod:`mufusion.sim.obstacle_response`); ``emergency_on_obstacle`` overrides it.
 
     Notes
     -----
@@ -117,6 +121,7 @@ class ClosedLoop:
     probing: ProbingSettings = field(default_factory=ProbingSettings)
     lane_recovery: LaneRecoverySettings = field(default_factory=LaneRecoverySettings)
     utilization_factor: float = 0.9
+    obstacle_response: ObstacleResponse = field(default_factory=ObstacleResponse)
 
     def run(
         self,
@@ -145,6 +150,7 @@ class ClosedLoop:
         self._minimal_risk = False
         self._planner_usable = True
         self._local_available = False
+        self._last_mode: PlanningMode = "cruise"
         for fault in self.faults:
             self._recorder.event(fault.start_s, "fault_scheduled", _describe(fault))
         try:
@@ -219,7 +225,8 @@ class ClosedLoop:
         )
         self._local_available = estimate.local_available
         obstacles = self.world.planner_obstacles(t, s_ego, behind_m=self.params.length_m)
-        mode = MINIMAL_RISK_MODE if self._minimal_risk else self._mode(obstacles)
+        mode = MINIMAL_RISK_MODE if self._minimal_risk else self._mode(obstacles, xf, estimate)
+        self._last_mode = mode
         self._consider_probe(t, xf, estimate, obstacles)
         started = time.perf_counter()
         plan: Plan | None = None
@@ -375,10 +382,15 @@ class ClosedLoop:
             min(command.torque_rear_nm, -(1.0 - share_front) * force * r),
         ).clipped(p)
 
-    def _mode(self, obstacles: Sequence[PlannerObstacle]) -> PlanningMode:
-        if not obstacles:
-            return "cruise"
-        return "emergency" if self.emergency_on_obstacle else "evade"
+    def _mode(
+        self, obstacles: Sequence[PlannerObstacle], xf: np.ndarray, estimate: FrictionEstimate
+    ) -> PlanningMode:
+        if obstacles and self.emergency_on_obstacle:
+            return "emergency"
+        return obstacle_mode(
+            obstacles, xf, self.estimate_grid_m, estimate.mu_hat, self.lane_bounds_m,
+            self.params, self.obstacle_response, braking=self._last_mode == "emergency",
+        )
 
     def _warm_up(self, steps: int) -> None:
         if steps <= 0:
