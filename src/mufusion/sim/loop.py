@@ -52,6 +52,8 @@ _log = logging.getLogger(__name__)
 
 MINIMAL_RISK_MODE: PlanningMode = "minimal_risk"
 """The planner's mode during the minimal-risk manoeuvre: brake to a stop in lane."""
+AT_REST_MPS = 0.1
+"""Below this speed [m/s] a vehicle stopping for an obstacle has stopped."""
 
 
 @dataclass
@@ -97,7 +99,8 @@ class ClosedLoop:
       otherwise the last one that was, while young enough, else ``safety.mu_floor``.
     - A planning step without a usable plan (the solver failed, the planner raised or was made
       to fail) keeps the previous plan. After ``safety.max_consecutive_fallbacks`` such steps in
-      a row, or at once when the friction source raises, the vehicle enters the minimal-risk
+      a row (not counting those at rest in front of an obstacle, :data:`AT_REST_MPS`), or at
+      once when the friction source raises, the vehicle enters the minimal-risk
       manoeuvre: the planner plans a stop in lane (``MINIMAL_RISK_MODE``); while it cannot, the
       loop brakes in lane itself (:func:`~mufusion.sim.minimal_risk.minimal_risk_command`).
       The manoeuvre is latched until the end of the run.
@@ -245,7 +248,10 @@ class ClosedLoop:
         step_ms = 1e3 * (time.perf_counter() - started)
         failed = plan is None or plan.fallback
         self._planner_usable = not failed
-        self._consecutive_fallbacks = self._consecutive_fallbacks + 1 if failed else 0
+        # Stopped for an obstacle, the manoeuvre's stop is done: a failed plan (the model is stiff
+        # at rest) keeps the vehicle held and starts nothing.
+        held = mode == "emergency" and float(xf[State.vx]) < AT_REST_MPS
+        self._consecutive_fallbacks = 0 if not failed else self._consecutive_fallbacks + (not held)
         if plan is not None and not plan.ok:
             _log.warning("planning step %d at t=%.2f s: solver status %s", step, t, plan.status)
         self._recorder.planning_step(
