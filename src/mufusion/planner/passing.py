@@ -54,7 +54,7 @@ def passing_left(
     >>> # Obstacle 1.5 m left of the centre, truck 2.6 m wide, 0.5 m margin, road −0.35…3.85 m:
     >>> passing_left(np.array([0.0]), 1.5, 2.3, -0.35, 3.85).tolist()
     [True]
-    >>> passing_left(np.array([0.0]), 0.0, 2.3, -0.35, 3.85).tolist()  # guess decides
+    >>> passing_left(np.array([-0.1]), 0.0, 2.3, -5.0, 5.0).tolist()  # room both sides: the guess
     [False]
     """
     guess_left = np.asarray(guess_d_m, dtype=float) >= obstacle_d_m
