@@ -226,7 +226,7 @@ def popup_feasibility(
     ...     utilization_factor=0.9, brake_dead_time_s=0.15, steer_dead_time_s=0.05,
     ...     steer_rate_radps=0.9, max_steer_rad=0.6, wheelbase_m=3.4, slip_rad_per_g=0.2365)
     >>> r.braking.feasibility_class.value, r.evasion.side, r.evasion.feasibility_class.value
-    ('infeasible', 'left', 'feasible')
+    ('infeasible', 'left', 'marginal')
     """
     for name, value in (
         ("speed_mps", speed_mps), ("mu", mu), ("obstacle_distance_m", obstacle_distance_m),
