@@ -54,19 +54,3 @@ def test_stopping_distance_and_decision() -> None:
     assert not stopping_possible(speed_mps=14.0, gap_m=need, mu_hat=float("nan"), **kw)
     with pytest.raises(ValueError, match="decel_mps2"):
         stopping_distance_m(10.0, 0.0, 0.1)
-
-
-def test_a_collapsed_corridor_keeps_a_sliver() -> None:
-    from mufusion.planner.ocp import MIN_CORRIDOR_WIDTH_M
-
-    # In a left curve of R = 28 m with the guess heading 0.088 rad left of the lane: bulge
-    # 0.18 m on the right, swing 0.32 m (rear) and 0.23 m (front): 0.7 m of play is gone.
-    guess = np.zeros((6, N_STATES))
-    guess[:, State.s] = np.linspace(100.0, 110.0, 6)
-    guess[:, State.dpsi] = 0.088
-    lo, hi = lateral_corridor(guess, [], -0.35, 0.35, TRUCK, 0.5, np.full(5, 1.0 / 28.0))
-    assert np.all(hi - lo == pytest.approx(MIN_CORRIDOR_WIDTH_M))
-    # Where there is play, the corridor is untouched.
-    guess[:, State.dpsi] = 0.0
-    lo, hi = lateral_corridor(guess, [], -0.35, 0.35, TRUCK, 0.5)
-    assert np.all(lo == pytest.approx(-0.35)) and np.all(hi == pytest.approx(0.35))

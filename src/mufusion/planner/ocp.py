@@ -258,15 +258,14 @@ def stage_parameters(
     p[:, Param.rear_stiffness] = c_r
     p[:, Param.radius_front] = radius_front
     p[:, Param.radius_rear] = radius_rear
-    return {"mu_hat": mu, "fzf": fzf, "fzr": fzr, "radius_front": radius_front,
-            "radius_rear": radius_rear, "rear_stiffness": c_r, "curvature": kappa, "p": p}
+    return {
+        "mu_hat": mu, "fzf": fzf, "fzr": fzr, "radius_front": radius_front,
+        "radius_rear": radius_rear, "rear_stiffness": c_r, "curvature": kappa, "p": p,
+    }
 
 
 MAX_SWING_HEADING_RAD = 0.1
 """Largest heading error whose corner swing :func:`lateral_corridor` takes off the lane bounds."""
-MIN_CORRIDOR_WIDTH_M = 0.05
-"""Least corridor width [m]: zero width is a degenerate QP (acados status 4; replayed failures
-solve from 2 cm on); 5 cm is far below the ≈ 10 cm to which the vehicle tracks its plan."""
 
 
 def lateral_corridor(
@@ -312,9 +311,9 @@ def lateral_corridor(
                               MAX_SWING_HEADING_RAD))
     hi = hi - a_front * np.maximum(sin_dpsi, 0.0) - a_rear * np.maximum(-sin_dpsi, 0.0)
     lo = lo + a_front * np.maximum(-sin_dpsi, 0.0) + a_rear * np.maximum(sin_dpsi, 0.0)
-    # A corridor too tight for the vehicle leaves a sliver about its midpoint, not an empty one.
-    mid, half = 0.5 * (lo + hi), 0.5 * MIN_CORRIDOR_WIDTH_M
-    lo, hi = np.minimum(lo, mid - half), np.maximum(hi, mid + half)
+    # A corridor too tight for the vehicle leaves its midpoint rather than an empty interval.
+    mid = 0.5 * (lo + hi)
+    lo, hi = np.minimum(lo, mid), np.maximum(hi, mid)
     for ob in obstacles:
         overlap = np.abs(s_k - ob.s_m) < half_len + 0.5 * ob.length_m + margin_m
         clear = 0.5 * ob.width_m + half_w + margin_m
