@@ -17,6 +17,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from mufusion.planner.passing import passing_left
 from mufusion.planner.safety import SafetySettings
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
@@ -288,7 +289,7 @@ def lateral_corridor(
     bounds shrink by that too. An obstacle
     overlapping the vehicle's footprint at the guess's predicted ``s_k`` closes the side opposite
     to the guess's ``d_k`` (pass left if the guess is left of the obstacle's centre), which keeps
-    the problem convex.
+    the problem convex, unless only the other side has room (:func:`~.passing.passing_left`).
     """
     s_k = guess_states[1:, State.s]
     d_k = guess_states[1:, State.d]
@@ -316,7 +317,7 @@ def lateral_corridor(
     for ob in obstacles:
         overlap = np.abs(s_k - ob.s_m) < half_len + 0.5 * ob.length_m + margin_m
         clear = 0.5 * ob.width_m + half_w + margin_m
-        left = d_k >= ob.d_m
+        left = passing_left(d_k, ob.d_m, clear, lo, hi)
         lo = np.where(overlap & left, np.maximum(lo, ob.d_m + clear), lo)
         hi = np.where(overlap & ~left, np.minimum(hi, ob.d_m - clear), hi)
     return lo, hi

@@ -163,10 +163,12 @@ class Variant:
 
 PAPER_METHOD: tuple[str, ...] = (
     "probing.enabled=false", "lane_recovery.enabled=false", "planner.curve_speed_reference=false",
+    "planner.brake_first=false",
 )
 """The paper's method: a planner that tracks the cruise speed (TAMP), without our additions that
-go beyond it: friction probing and lane recovery (:mod:`mufusion.sim.supervision`) and the curve-
-and friction-aware speed reference (:mod:`mufusion.planner.speed_profile`)."""
+go beyond it: friction probing and lane recovery (:mod:`mufusion.sim.supervision`), the curve-
+and friction-aware speed reference (:mod:`mufusion.planner.speed_profile`) and stopping in front
+of an obstacle where possible (:mod:`mufusion.sim.obstacle_response`)."""
 
 TURN_SNAPSHOTS_M = (0.0, 15.0, 30.0, 55.0)
 POPUP_SNAPSHOTS_M = (0.0, 2.0, 18.0, 40.0)

@@ -143,6 +143,10 @@ class PlannerSettings(_Strict):
     """Track the highest speed a point mass could hold along the road with μ̂ (curves and
     friction ahead, beyond the horizon) instead of the cruise speed alone
     (``docs/feasibility.md``, "GT at the limit")."""
+    brake_first: bool = True
+    """Stop in front of an obstacle in the path whenever the friction the planner may use
+    allows it (or no side has room), and evade only otherwise; ``false``: evade whenever an
+    obstacle is active, as the paper (:mod:`mufusion.sim.obstacle_response`)."""
 
 
 SimTires = Literal["default", "authors", "authors_interpolated"]

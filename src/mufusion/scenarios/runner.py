@@ -29,6 +29,7 @@ from mufusion.scenarios.config import PopupScenario, TurnScenario, planner_lane_
 from mufusion.scenarios.feasibility import classify_scenario
 from mufusion.sim.log import RunLog
 from mufusion.sim.loop import ClosedLoop
+from mufusion.sim.obstacle_response import ObstacleResponse
 from mufusion.sim.records import (
     LoopRatesMeta,
     ObstacleTrace,
@@ -140,6 +141,12 @@ def run_scenario(
         probing=cfg.probing,
         lane_recovery=cfg.lane_recovery,
         utilization_factor=planner.config.utilization_factor,
+        obstacle_response=ObstacleResponse(
+            brake_first=cfg.planner.brake_first,
+            utilization_factor=planner.config.utilization_factor,
+            polygon_sides=planner.config.polygon_sides, margin_m=planner.config.obstacle_margin_m,
+            planning_period_s=1.0 / rates.planner_hz,
+        ),
         meta=run_meta(cfg, configuration, params, road, planner.config),
     )
     # One BLAS thread: the fusion's small matrix products gain nothing from a thread pool, and

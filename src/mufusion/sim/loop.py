@@ -32,6 +32,7 @@ from mufusion.sim.estimate_guard import EstimateGuard
 from mufusion.sim.faults import Fault, active_kinds, estimate_delay_s
 from mufusion.sim.log import RunLog
 from mufusion.sim.minimal_risk import minimal_risk_command
+from mufusion.sim.obstacle_response import ObstacleResponse, obstacle_mode
 from mufusion.sim.recorder import Recorder
 from mufusion.sim.records import RunMeta
 from mufusion.sim.supervision import (
@@ -51,6 +52,8 @@ _log = logging.getLogger(__name__)
 
 MINIMAL_RISK_MODE: PlanningMode = "minimal_risk"
 """The planner's mode during the minimal-risk manoeuvre: brake to a stop in lane."""
+AT_REST_MPS = 0.1
+"""Below this speed [m/s] a vehicle stopping for an obstacle has stopped."""
 
 
 @dataclass
@@ -83,6 +86,9 @@ class ClosedLoop:
         How the loop reacts to missing, stale or failing parts.
     probing, lane_recovery
         The supervisory behaviours of :mod:`mufusion.sim.supervision` (beyond the paper).
+    obstacle_response
+        Stop in front of an obstacle where possible, else evade
+        (:mod:`mufusion.sim.obstacle_response`); ``emergency_on_obstacle`` overrides it.
 
     Notes
     -----
@@ -93,7 +99,8 @@ class ClosedLoop:
       otherwise the last one that was, while young enough, else ``safety.mu_floor``.
     - A planning step without a usable plan (the solver failed, the planner raised or was made
       to fail) keeps the previous plan. After ``safety.max_consecutive_fallbacks`` such steps in
-      a row, or at once when the friction source raises, the vehicle enters the minimal-risk
+      a row (not counting those at rest in front of an obstacle, :data:`AT_REST_MPS`), or at
+      once when the friction source raises, the vehicle enters the minimal-risk
       manoeuvre: the planner plans a stop in lane (``MINIMAL_RISK_MODE``); while it cannot, the
       loop brakes in lane itself (:func:`~mufusion.sim.minimal_risk.minimal_risk_command`).
       The manoeuvre is latched until the end of the run.
@@ -117,6 +124,7 @@ class ClosedLoop:
     probing: ProbingSettings = field(default_factory=ProbingSettings)
     lane_recovery: LaneRecoverySettings = field(default_factory=LaneRecoverySettings)
     utilization_factor: float = 0.9
+    obstacle_response: ObstacleResponse = field(default_factory=ObstacleResponse)
 
     def run(
         self,
@@ -145,6 +153,7 @@ class ClosedLoop:
         self._minimal_risk = False
         self._planner_usable = True
         self._local_available = False
+        self._last_mode: PlanningMode = "cruise"
         for fault in self.faults:
             self._recorder.event(fault.start_s, "fault_scheduled", _describe(fault))
         try:
@@ -219,7 +228,8 @@ class ClosedLoop:
         )
         self._local_available = estimate.local_available
         obstacles = self.world.planner_obstacles(t, s_ego, behind_m=self.params.length_m)
-        mode = MINIMAL_RISK_MODE if self._minimal_risk else self._mode(obstacles)
+        mode = MINIMAL_RISK_MODE if self._minimal_risk else self._mode(obstacles, xf, estimate)
+        self._last_mode = mode
         self._consider_probe(t, xf, estimate, obstacles)
         started = time.perf_counter()
         plan: Plan | None = None
@@ -238,7 +248,10 @@ class ClosedLoop:
         step_ms = 1e3 * (time.perf_counter() - started)
         failed = plan is None or plan.fallback
         self._planner_usable = not failed
-        self._consecutive_fallbacks = self._consecutive_fallbacks + 1 if failed else 0
+        # Stopped for an obstacle, the manoeuvre's stop is done: a failed plan (the model is stiff
+        # at rest) keeps the vehicle held and starts nothing.
+        held = mode == "emergency" and float(xf[State.vx]) < AT_REST_MPS
+        self._consecutive_fallbacks = 0 if not failed else self._consecutive_fallbacks + (not held)
         if plan is not None and not plan.ok:
             _log.warning("planning step %d at t=%.2f s: solver status %s", step, t, plan.status)
         self._recorder.planning_step(
@@ -375,10 +388,15 @@ class ClosedLoop:
             min(command.torque_rear_nm, -(1.0 - share_front) * force * r),
         ).clipped(p)
 
-    def _mode(self, obstacles: Sequence[PlannerObstacle]) -> PlanningMode:
-        if not obstacles:
-            return "cruise"
-        return "emergency" if self.emergency_on_obstacle else "evade"
+    def _mode(
+        self, obstacles: Sequence[PlannerObstacle], xf: np.ndarray, estimate: FrictionEstimate
+    ) -> PlanningMode:
+        if obstacles and self.emergency_on_obstacle:
+            return "emergency"
+        return obstacle_mode(
+            obstacles, xf, self.estimate_grid_m, estimate.mu_hat, self.lane_bounds_m,
+            self.params, self.obstacle_response, braking=self._last_mode == "emergency",
+        )
 
     def _warm_up(self, steps: int) -> None:
         if steps <= 0:

@@ -1,0 +1,108 @@
+from __future__ import annotations
+
+import numpy as np
+
+from mufusion.planner.ocp import PlannerObstacle
+from mufusion.sim.obstacle_response import ObstacleResponse, obstacle_mode
+from mufusion.vehicle.params import TRUCK
+from mufusion.vehicle.planner_model import N_STATES, State
+
+GRID = np.arange(0.0, 51.0)
+ROAD = (-0.35, 3.85)
+
+
+def state(speed: float, d: float = 0.0) -> np.ndarray:
+    x = np.zeros(N_STATES)
+    x[State.s], x[State.d], x[State.vx] = 60.0, d, speed
+    return x
+
+
+def mode(speed, ahead_m, mu, offset=0.0, brake_first=True, braking=False, d=0.0):
+    front = 0.5 * TRUCK.length_m + 0.5 * (TRUCK.cog_to_front_axle_m - TRUCK.cog_to_rear_axle_m)
+    ob = PlannerObstacle(s_m=60.0 + front + ahead_m, d_m=offset, length_m=1.0, width_m=1.0)
+    return obstacle_mode([ob], state(speed, d), GRID, np.full(GRID.shape, mu), ROAD, TRUCK,
+                         ObstacleResponse(brake_first=brake_first), braking=braking)
+
+
+def test_stop_where_possible_else_evade() -> None:
+    # 14 m/s, μ̂ 0.75: stop in 0.25·14 + 14²/(2·6.40) = 18.8 m of 35 − 0.5 − 0.5 = 34 m.
+    assert mode(14.0, 35.0, 0.75) == "emergency"
+    # 24 m/s: 6 + 45 m, more than there is: evade.
+    assert mode(24.0, 35.0, 0.75) == "evade"
+    # The paper's choice: evade whenever there is an obstacle.
+    assert mode(14.0, 35.0, 0.75, brake_first=False) == "evade"
+    assert obstacle_mode([], state(14.0), GRID, np.full(51, 0.75), ROAD, TRUCK,
+                         ObstacleResponse(brake_first=True)) == "cruise"
+
+
+def test_a_stop_under_way_is_not_charged_the_brake_lag_again() -> None:
+    # A gap between the stop with the lag (0.25 s of dead time) and without it (0.1 s).
+    decel = 0.9 * np.cos(np.pi / 12) * 0.5 * 9.81
+    speed = 12.0
+    gap = speed * 0.18 + speed**2 / (2 * decel)  # between the two dead times
+    ahead = gap + 1.0
+    assert mode(speed, ahead, 0.5) == "evade"
+    assert mode(speed, ahead, 0.5, braking=True) == "emergency"
+
+
+def test_obstacles_beside_the_path_or_blocking_the_road() -> None:
+    # 3 m left of the vehicle: not in its path (clearance 2.3 m), nothing to stop for.
+    assert mode(24.0, 20.0, 0.75, offset=3.0) == "evade"
+    # Straddling so that neither side has room: stop, whatever the speed.
+    assert mode(24.0, 20.0, 0.75, offset=1.6) == "emergency"
+
+
+class _FailingPlanner:
+    """A planner whose every solve fails (fallback plans that hold the state)."""
+
+    def step(self, x0, t_s, **kw):
+        from mufusion.planner import Plan
+
+        n = 8
+        states = np.tile(x0, (n + 1, 1))
+        fz = np.full(n, 50e3)
+        return Plan(t0_s=t_s, states=states, inputs=np.zeros((n, 3)),
+                    rear_lateral_force_n=np.zeros(n), mu_hat=np.full(n, 0.8),
+                    normal_load_front_n=fz, normal_load_rear_n=fz, force_limit_front_n=fz,
+                    force_limit_rear_n=fz, status=4, ok=False, fallback=True,
+                    solve_time_s=1e-4)
+
+
+def _events(speed_mps: float) -> list[str]:
+    from factories import run_meta
+    from mufusion.configurations import FrictionEstimate
+    from mufusion.road import FrictionMap, Obstacle, straight_road
+    from mufusion.sim.loop import ClosedLoop, LoopRates
+    from mufusion.sim.world import World
+    from mufusion.vehicle.actuators import ActuatorCommand
+    from mufusion.vehicle.plant import Plant, initial_state
+
+    class _Controller:
+        def command(self, t_s, x_frenet, steer_rad_now, plan, curvature):
+            return ActuatorCommand(0.0, -2000.0, -2000.0)
+
+    class _Friction:
+        def observe(self, *args):
+            pass
+
+        def step(self, s_ahead_m, mu_true_ahead, utilization, *, camera_ok=True, t_s=None):
+            return FrictionEstimate(s_m=np.asarray(s_ahead_m), mu_hat=np.asarray(mu_true_ahead),
+                                    local_available=False, local_mu=None)
+
+    road = straight_road(300.0, friction=FrictionMap.step(0.8, 0.8, 40.0),
+                         obstacles=[Obstacle(s_m=35.0, d_m=0.0, length_m=1.0, width_m=1.0)])
+    world = World(road, to_planner_obstacle=lambda o: PlannerObstacle(o.s_m, o.d_m, 1.0, 1.0))
+    rates = LoopRates(200.0, 50.0, 10.0)
+    plant = Plant(TRUCK, initial_state(TRUCK, 20.0, 0.0, 0.0, speed_mps), dt_s=1 / 200.0)
+    loop = ClosedLoop(world=world, params=TRUCK, plant=plant, planner=_FailingPlanner(),
+                      controller=_Controller(), friction=_Friction(), rates=rates,
+                      reference_speed_mps=10.0, lane_bounds_m=(-0.45, 0.45), meta=run_meta(),
+                      emergency_on_obstacle=True)
+    log = loop.run(1.0)
+    return list(log.frame("events")["kind"])
+
+
+def test_failed_plans_at_rest_in_front_of_an_obstacle_start_no_minimal_risk_manoeuvre() -> None:
+    # At rest: ten failed plans in a row, no manoeuvre; moving (5 m/s): the manoeuvre after five.
+    assert "minimal_risk" not in _events(0.0)
+    assert "minimal_risk" in _events(5.0)
