@@ -1,0 +1,33 @@
+"""Session hygiene: the test run ends with no child process and no foreign thread left.
+
+Campaign tests fork worker pools in this process. A worker or thread that outlived its test would
+keep the interpreter from exiting (``concurrent.futures`` and ``multiprocessing`` join them at
+exit) after every test has passed. At the end of the session any such leftover is named in the
+terminal summary and stopped, so the run always ends.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import threading
+
+import pytest
+
+_LEFTOVERS: list[str] = []
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    for child in multiprocessing.active_children():
+        _LEFTOVERS.append(f"child process {child.name} (pid {child.pid})")
+        child.terminate()
+        child.join(timeout=10.0)
+    for thread in threading.enumerate():
+        if thread is not threading.main_thread() and not thread.daemon and thread.is_alive():
+            _LEFTOVERS.append(f"non-daemon thread {thread.name}")
+
+
+def pytest_terminal_summary(terminalreporter) -> None:
+    if _LEFTOVERS:
+        terminalreporter.write_sep("=", "left behind by the tests (stopped at the end)")
+        for line in _LEFTOVERS:
+            terminalreporter.write_line(line)
