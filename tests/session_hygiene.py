@@ -1,5 +1,8 @@
 """Session hygiene: the test run ends with no child process and no foreign thread left.
 
+A pytest plugin, loaded by ``-p session_hygiene`` in pyproject.toml (a root ``conftest.py``
+would share its module name with the per-directory ones under ``--doctest-modules``).
+
 Campaign tests fork worker pools in this process. A worker or thread that outlived its test would
 keep the interpreter from exiting (``concurrent.futures`` and ``multiprocessing`` join them at
 exit) after every test has passed. At the end of the session any such leftover is named in the
