@@ -191,12 +191,15 @@ def _dispatch_pool(
 def _stop_pool(pool: ProcessPoolExecutor) -> None:
     """Cancel queued runs and terminate running workers."""
     # Python < 3.14 has no public call to stop running tasks (3.14: terminate_workers()).
-    processes = list((pool._processes or {}).values())
+    # The pool's process table is read before and after the shutdown request: the executor's
+    # manager thread may drop it (or a process may appear) in between.
+    processes = {p.pid: p for p in list((pool._processes or {}).values())}
     pool.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
+    processes.update({p.pid: p for p in list((pool._processes or {}).values())})
+    for process in processes.values():
         if process.is_alive():
             process.terminate()
-    for process in processes:
+    for process in processes.values():
         process.join(timeout=10.0)
 
 

@@ -81,79 +81,28 @@ class _Steering:
     dead_time_s: float
 
 
-def _segment(y: float, v: float, a0: float, jerk: float, dur: float) -> tuple[float, float]:
-    """Shift and lateral speed after ``dur`` with acceleration ``a0 + jerk·t``."""
-    return (y + v * dur + 0.5 * a0 * dur**2 + jerk * dur**3 / 6.0,
-            v + a0 * dur + 0.5 * jerk * dur**2)
-
-
-def _profile(a: float, ramp: float, switch: float, until: float) -> tuple[float, float]:
-    """Shift at ``until`` and the peak shift of the lane change that counter-steers at ``switch``.
-
-    Times count from the end of the servo's lag. The lateral acceleration ramps up at the
-    steering rate (``a/ramp`` per second) towards ``a`` until ``switch``, then down at the same
-    rate to ``−a`` and stays there until the lateral speed is zero: the peak. After the peak the
-    shift is held (optimistic: the vehicle straightens up at once).
-    """
-    jerk = a / ramp
-    pieces: list[tuple[float, float, float]] = []  # (start accel, jerk, duration)
-    up = min(switch, ramp)
-    pieces.append((0.0, jerk, up))
-    if switch > ramp:
-        pieces.append((a, 0.0, switch - ramp))
-    a_switch = jerk * up
-    pieces.append((a_switch, -jerk, (a_switch + a) / jerk))
-    y = v = t = 0.0
-    shift_at = math.nan
-    for a0, j, dur in pieces:
-        if math.isnan(shift_at) and t + dur >= until:
-            shift_at = _segment(y, v, a0, j, until - t)[0]
-        y, v = _segment(y, v, a0, j, dur)
-        t += dur
-    peak = y + 0.5 * v * v / a  # constant −a until the lateral speed is zero
-    if math.isnan(shift_at):
-        tail = until - t
-        shift_at = y + v * tail - 0.5 * a * tail**2 if tail < v / a else peak
-    return shift_at, peak
-
-
-def _shift_m(
-    speed_mps: float, time_s: float, a_max: float, st: _Steering, room_m: float = math.inf
-) -> tuple[float, ...]:
-    """Lateral shift [m] after ``time_s`` at ``speed_mps``, the ramp time and the acceleration.
-
-    The shift is the largest whose lane change ends (lateral speed zero) within ``room_m``: the
-    counter-steer starts as late as that allows (bisection; the peak grows with the switch time).
-    """
+def _shift_m(speed_mps: float, time_s: float, a_max: float, st: _Steering) -> tuple[float, ...]:
+    """Lateral shift [m] after ``time_s`` at ``speed_mps``, the ramp time and the acceleration."""
     steer_per_accel = st.wheelbase_m / speed_mps**2 + st.slip_rad_per_g / GRAVITY_MPS2
     a = min(a_max, st.max_rad / steer_per_accel)
     ramp = a * steer_per_accel / st.rate_radps
     t = time_s - st.dead_time_s
     if t <= 0.0:
         return 0.0, ramp, a
-    if _profile(a, ramp, t, t)[1] <= room_m:
-        return _profile(a, ramp, t, t)[0], ramp, a
-    lo, hi = 0.0, t
-    for _ in range(50):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if _profile(a, ramp, mid, t)[1] <= room_m else (lo, mid)
-    return _profile(a, ramp, lo, t)[0], ramp, a
+    if ramp >= t:  # still ramping: a(τ) = a τ / ramp
+        return a * t**3 / (6.0 * ramp), ramp, a
+    return a * (0.5 * t * t - 0.5 * ramp * t + ramp * ramp / 6.0), ramp, a
 
 
-def _max_speed(
-    shift_needed_m: float, path_m: float, a_max: float, st: _Steering, room_m: float = math.inf
-) -> float:
+def _max_speed(shift_needed_m: float, path_m: float, a_max: float, st: _Steering) -> float:
     """Highest speed at which the shift is reached in time (the shift falls with speed)."""
     lo, hi = 0.01, 1000.0
-
-    def reaches(v: float) -> bool:
-        return _shift_m(v, path_m / v, a_max, st, room_m)[0] >= shift_needed_m
-
-    if reaches(hi):
+    if _shift_m(hi, path_m / hi, a_max, st)[0] >= shift_needed_m:
         return hi
-    for _ in range(60):  # bisection in log space
+    for _ in range(80):  # bisection in log space
         mid = math.sqrt(lo * hi)
-        lo, hi = (mid, hi) if reaches(mid) else (lo, mid)
+        lo, hi = (mid, hi) if _shift_m(mid, path_m / mid, a_max, st)[0] >= shift_needed_m else (
+            lo, mid)
     return lo
 
 
@@ -226,7 +175,7 @@ def popup_feasibility(
     ...     utilization_factor=0.9, brake_dead_time_s=0.15, steer_dead_time_s=0.05,
     ...     steer_rate_radps=0.9, max_steer_rad=0.6, wheelbase_m=3.4, slip_rad_per_g=0.2365)
     >>> r.braking.feasibility_class.value, r.evasion.side, r.evasion.feasibility_class.value
-    ('infeasible', 'left', 'marginal')
+    ('infeasible', 'left', 'feasible')
     """
     for name, value in (
         ("speed_mps", speed_mps), ("mu", mu), ("obstacle_distance_m", obstacle_distance_m),
@@ -263,16 +212,15 @@ def popup_feasibility(
     needs = {"left": obstacle_offset_m + reach, "right": reach - obstacle_offset_m}
     rooms = {"left": room_left_m, "right": room_right_m}
     time_s = path / speed_mps
+    shift, ramp, a = _shift_m(speed_mps, time_s, a_max, steering)
 
     def envelope(side: Literal["left", "right"]) -> EvasionEnvelope:
         need = needs[side]
         label: Literal["left", "right", "none"] = side
-        shift, ramp, a = _shift_m(speed_mps, time_s, a_max, steering, rooms[side])
         if need <= 0.0:  # the obstacle does not reach into the vehicle's path
             v_max, label = math.inf, "none"
         else:
-            v_max = (_max_speed(need, path, a_max, steering, rooms[side]) if need <= rooms[side]
-                     else 0.0)
+            v_max = _max_speed(need, path, a_max, steering) if need <= rooms[side] else 0.0
             label = side
         return EvasionEnvelope(
             side=label, required_shift_m=max(need, 0.0), achievable_shift_m=shift,
