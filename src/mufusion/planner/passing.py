@@ -19,7 +19,10 @@ import math
 
 import numpy as np
 
+from mufusion.vehicle.braking import stopping_distance_m
 from mufusion.vehicle.params import GRAVITY_MPS2
+
+__all__ = ["blocks_road", "passing_left", "stopping_distance_m", "stopping_possible"]
 
 
 def passing_left(
@@ -73,28 +76,6 @@ def blocks_road(obstacle_d_m: float, clearance_m: float, d_min_m: float, d_max_m
     (False, True)
     """
     return obstacle_d_m + clearance_m > d_max_m and obstacle_d_m - clearance_m < d_min_m
-
-
-def stopping_distance_m(speed_mps: float, decel_mps2: float, dead_time_s: float) -> float:
-    """Distance [m] to stop from ``speed_mps``: ``v t_dead + v² / (2 a)``.
-
-    Raises
-    ------
-    ValueError
-        If the speed is negative, the deceleration not positive or the dead time negative.
-
-    Examples
-    --------
-    >>> round(stopping_distance_m(14.0, 7.0, 0.25), 2)
-    17.5
-    """
-    if not (math.isfinite(speed_mps) and speed_mps >= 0.0):
-        raise ValueError(f"speed_mps must be finite and >= 0, got {speed_mps!r}")
-    if not (math.isfinite(decel_mps2) and decel_mps2 > 0.0):
-        raise ValueError(f"decel_mps2 must be finite and > 0, got {decel_mps2!r}")
-    if not (math.isfinite(dead_time_s) and dead_time_s >= 0.0):
-        raise ValueError(f"dead_time_s must be finite and >= 0, got {dead_time_s!r}")
-    return speed_mps * dead_time_s + 0.5 * speed_mps**2 / decel_mps2
 
 
 def stopping_possible(

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mufusion.planner import PlannerObstacle
+from mufusion.planner import PlannerConfig, PlannerObstacle
 from mufusion.planner.passing import blocks_road, stopping_possible
 from mufusion.sim.components import PlanningMode
 from mufusion.vehicle.params import VehicleParams
@@ -40,11 +40,12 @@ class ObstacleResponse:
         Time until a new plan acts [s]; added to the brakes' lag.
     """
 
+    # Defaults are the planner's (one home: PlannerConfig); the runner passes the run's own.
     brake_first: bool = False
-    utilization_factor: float = 0.9
-    polygon_sides: int = 12
-    margin_m: float = 0.5
-    planning_period_s: float = 0.1
+    utilization_factor: float = PlannerConfig.utilization_factor
+    polygon_sides: int = PlannerConfig.polygon_sides
+    margin_m: float = PlannerConfig.obstacle_margin_m
+    planning_period_s: float = PlannerConfig.dt_s
 
 
 def obstacle_mode(

@@ -19,7 +19,6 @@ from mufusion.scenarios.config import PopupScenario, TurnScenario
 from mufusion.scenarios.feasibility.common import (
     MARGINAL_BAND_FRACTION,
     FeasibilityClass,
-    braking_limited_speed_mps,
     classify_speed_margin,
 )
 from mufusion.scenarios.feasibility.popup import (
@@ -35,6 +34,7 @@ from mufusion.scenarios.feasibility.turn import (
     effective_radius_m,
     turn_feasibility,
 )
+from mufusion.vehicle.braking import braking_limited_speed_mps
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import secant_stiffness_factor
 

@@ -73,17 +73,3 @@ def require_fraction(name: str, value: float) -> None:
     """Raise ValueError naming ``name`` unless ``value`` is in (0, 1]."""
     if not (math.isfinite(value) and 0.0 < value <= 1.0):
         raise ValueError(f"{name} must be in (0, 1], got {value!r}")
-
-
-def braking_limited_speed_mps(distance_m: float, decel_mps2: float, dead_time_s: float) -> float:
-    """Highest speed from which a stop fits in ``distance_m``: ``v²/(2a) + v·t = D`` solved for v.
-
-    Examples
-    --------
-    >>> round(braking_limited_speed_mps(20.0, 5.0, 0.0), 6)  # √(2·5·20)
-    14.142136
-    """
-    if distance_m <= 0.0:
-        return 0.0
-    t = dead_time_s
-    return decel_mps2 * (-t + math.sqrt(t * t + 2.0 * distance_m / decel_mps2))

@@ -19,11 +19,11 @@ from typing import Literal
 from mufusion.scenarios.feasibility.common import (
     GRAVITY_MPS2,
     FeasibilityClass,
-    braking_limited_speed_mps,
     classify_speed_margin,
     require_fraction,
     require_positive,
 )
+from mufusion.vehicle.braking import braking_limited_speed_mps, stopping_distance_m
 
 
 @dataclass(frozen=True)
@@ -199,7 +199,7 @@ def popup_feasibility(
     a_max = utilization_factor * mu * GRAVITY_MPS2
     path = obstacle_distance_m - 0.5 * obstacle_length_m
     decel = min(a_max, max_decel_mps2)
-    stop = speed_mps**2 / (2.0 * decel) + speed_mps * brake_dead_time_s
+    stop = stopping_distance_m(speed_mps, decel, brake_dead_time_s)
     v_brake = braking_limited_speed_mps(path, decel, brake_dead_time_s)
     braking = BrakingEnvelope(
         available_distance_m=path, stopping_distance_m=stop, spare_distance_m=path - stop,
