@@ -119,7 +119,8 @@ def _textbook_profile(s, kappa, mu, accel_fraction, end_speed):
                    end_speed**2)
     for i in range(s.size - 2, -1, -1):
         lateral = u[i + 1] * max(kappa[i], kappa[i + 1])
-        braking = np.sqrt(max(accel[i] ** 2 - lateral**2, 0.0))
+        # Squares as products, like the fast pass: numpy's scalar ``** 2`` may round differently.
+        braking = np.sqrt(max(accel[i] * accel[i] - lateral * lateral, 0.0))
         u[i] = min(u[i], u[i + 1] + 2.0 * braking * (s[i + 1] - s[i]))
     return np.sqrt(u)
 
