@@ -18,12 +18,14 @@ from mufusion.planner.ocp import PlannerObstacle, longitudinal_force_bounds_n
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
+    N_STATES,
     Input,
     State,
     frenet_bicycle_dynamics,
     normal_loads_n,
     rear_cornering_stiffness_n_per_rad,
 )
+from mufusion.vehicle.planner_rk4 import BatchRK4
 from mufusion.vehicle.surface_tires import SurfaceTireTable
 
 # Cost of one metre of obstacle/road violation relative to tracking (per stage) [1/m].
@@ -139,42 +141,58 @@ def candidate_rollouts(
     """
     d_t, v_t = (a.ravel() for a in np.meshgrid(lateral_targets_m, speed_targets_mps))
     m_count = d_t.size
-    x = np.repeat(np.asarray(x0, dtype=float)[:, None], m_count, axis=1)
+    # The trajectories are written in place; each step is rk4_step's arithmetic operand by
+    # operand (BatchRK4), so the result is the straightforward loop's bit for bit.
+    states = np.empty((horizon_steps + 1, N_STATES, m_count))
+    inputs = np.empty((horizon_steps, N_INPUTS, m_count))
+    states[0] = np.asarray(x0, dtype=float)[:, None]
+    rk4 = BatchRK4(params, m_count)
     lower, upper = longitudinal_force_bounds_n(params)
     m = params.mass_kg
     share_front = params.cog_to_rear_axle_m / params.wheelbase_m
-    xs, us = [x], []
+    long_gain = m * config.speed_gain_1_per_s
     ax = np.zeros(m_count)
-    for _ in range(horizon_steps):
-        v = np.maximum(x[State.vx], 1.0)
-        kappa = np.asarray(curvature_of_s(x[State.s]), dtype=float) * np.ones(m_count)
-        mu = np.asarray(mu_hat_of_s(x[State.s]), dtype=float) * np.ones(m_count)
+    for k in range(horizon_steps):
+        x, u, x_next = states[k], inputs[k], states[k + 1]
+        vx = x[State.vx]
+        v = np.maximum(vx, 1.0)
+        kappa = _batch(curvature_of_s(x[State.s]), m_count)
+        mu = _batch(mu_hat_of_s(x[State.s]), m_count)
         fzf, fzr = normal_loads_n(ax, params)
-        # A diverged candidate (discarded by the caller) may sit where μ̂ is not finite.
-        mu_stiffness = np.where(np.isfinite(mu) & (mu > 0.0), mu, 1.0)
-        c_r = rear_cornering_stiffness_n_per_rad(
-            params, fzr, utilization_factor, mu_hat=mu_stiffness, table=stiffness_table
-        )
+        if stiffness_table is None:  # the vehicle's tire: μ̂ does not enter
+            c_r = rear_cornering_stiffness_n_per_rad(params, fzr, utilization_factor)
+        else:
+            # A diverged candidate (discarded by the caller) may sit where μ̂ is not finite.
+            mu_stiffness = np.where(np.isfinite(mu) & (mu > 0.0), mu, 1.0)
+            c_r = rear_cornering_stiffness_n_per_rad(
+                params, fzr, utilization_factor, mu_hat=mu_stiffness, table=stiffness_table
+            )
         fyf = steering_force_n(x, d_t, kappa, v, params, config)
-        f_long = m * config.speed_gain_1_per_s * (v_t - x[State.vx])
-        fxf = np.where(f_long < 0.0, share_front * f_long, 0.0)
-        fxr = np.where(f_long < 0.0, (1.0 - share_front) * f_long, f_long)
+        f_long = long_gain * (v_t - vx)
+        braking = f_long < 0.0
+        fxf = np.where(braking, share_front * f_long, 0.0)
+        fxr = np.where(braking, (1.0 - share_front) * f_long, f_long)
         # Saturate at the friction limits (longitudinal first, lateral gets what remains).
-        limit_f = utilization_factor * mu * fzf
-        limit_r = utilization_factor * mu * fzr
+        mu_limit = utilization_factor * mu
+        limit_f = mu_limit * fzf
+        limit_r = mu_limit * fzr
         # np.minimum(np.maximum(...)) is np.clip's definition, at a fraction of its overhead.
-        fxf = np.minimum(np.maximum(fxf, np.maximum(lower[0], -0.8 * limit_f)), upper[0])
+        fxf = np.minimum(np.maximum(fxf, np.maximum(lower[0], -0.8 * limit_f)), upper[0],
+                         out=u[Input.fxf])
         fxr = np.minimum(
             np.maximum(fxr, np.maximum(lower[1], -0.8 * limit_r)),
             np.minimum(upper[1], 0.8 * limit_r),
+            out=u[Input.fxr],
         )
         lat_room = np.sqrt(np.maximum(limit_f**2 - fxf**2, 0.0)) * 0.95
-        fyf = np.minimum(np.maximum(fyf, -lat_room), lat_room)
-        u = np.stack([fyf, fxf, fxr])
-        u[Input.fyf], u[Input.fxf], u[Input.fxr] = fyf, fxf, fxr
-        x = rk4_step(x, u, kappa, c_r, params, dt_s)
-        x[State.vx] = np.maximum(x[State.vx], 0.0)
+        np.minimum(np.maximum(fyf, -lat_room), lat_room, out=u[Input.fyf])
+        rk4.step(x, u, kappa, c_r, dt_s, x_next)
+        np.maximum(x_next[State.vx], 0.0, out=x_next[State.vx])
         ax = (fxf + fxr) / m
-        xs.append(x)
-        us.append(u)
-    return np.stack(xs), np.stack(us).reshape(horizon_steps, N_INPUTS, m_count)
+    return states, inputs
+
+
+def _batch(values: np.ndarray | float, m_count: int) -> np.ndarray:
+    """``values`` as a float array of shape ``(m_count,)`` (broadcast as ``values * ones``)."""
+    array = np.asarray(values, dtype=float)
+    return array if array.shape == (m_count,) else array * np.ones(m_count)
