@@ -112,6 +112,9 @@ class ReferencePath:
         self._dk = np.array(
             [(seg.curvature_end_1pm - seg.curvature_start_1pm) / seg.length_m for seg in segments]
         )
+        # No curvature anywhere (+0.0 at every start, no change): κ(s) is +0.0 for every s, which
+        # is what the general expression gives (+0.0 + 0.0·σ), without its dozen array calls.
+        self._flat = not (np.any(self._k0) or np.any(self._dk) or np.any(np.signbit(self._k0)))
         headings = [float(start_heading_rad)]
         for k0, dk, length in zip(self._k0, self._dk, lengths, strict=True):
             headings.append(headings[-1] + k0 * length + 0.5 * dk * length**2)
@@ -167,6 +170,8 @@ class ReferencePath:
     def curvature(self, s_m: np.ndarray | float) -> np.ndarray:
         """Path curvature κ(s) [1/m], left positive; 0 on the straight extensions."""
         s = np.asarray(s_m, dtype=float)
+        if self._flat:
+            return np.zeros(s.shape)
         i = self._segment_index(s)
         sigma = s - self._seg_start[i]
         inside = (s >= 0.0) & (s <= self.length_m)
