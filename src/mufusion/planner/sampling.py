@@ -151,11 +151,13 @@ def candidate_rollouts(
     law = _TrackingLaw(params, config, utilization_factor, d_t, v_t)
     for k in range(horizon_steps):
         x, u, x_next = states[k], inputs[k], states[k + 1]
-        kappa = _batch(curvature_of_s(x[State.s]), m_count)
-        mu = _batch(mu_hat_of_s(x[State.s]), m_count)
+        s_k = x[_S]
+        kappa = _batch(curvature_of_s(s_k), m_count)
+        mu = _batch(mu_hat_of_s(s_k), m_count)
         c_r = law.inputs(x, kappa, mu, u, stiffness_table)
         rk4.step(x, u, kappa, c_r, dt_s, x_next)
-        np.maximum(x_next[State.vx], _ZERO, out=x_next[State.vx])
+        vx_next = x_next[_VX]
+        np.maximum(vx_next, _ZERO, out=vx_next)
     return states, inputs
 
 
@@ -170,6 +172,10 @@ def _batch(values: np.ndarray | float, m_count: int) -> np.ndarray:
 _add, _sub, _mul, _div = np.add, np.subtract, np.multiply, np.divide
 _max, _min, _square, _sqrt, _atan2 = np.maximum, np.minimum, np.square, np.sqrt, np.arctan2
 _ZERO = np.array(0.0)
+# Plain ints: indexing with an IntEnum member costs three times as much.
+_S, _D, _DPSI, _PSIDOT, _VX = (int(i) for i in (State.s, State.d, State.dpsi, State.psidot,
+                                                  State.vx))
+_FYF, _FXF, _FXR = (int(i) for i in Input)
 
 
 def _const(value: float) -> np.ndarray:
@@ -222,7 +228,7 @@ class _TrackingLaw:
     def inputs(self, x: np.ndarray, kappa: np.ndarray, mu: np.ndarray, u: np.ndarray,
                stiffness_table: SurfaceTireTable | None) -> np.ndarray:
         """Write the inputs ``u (3, M)`` at states ``x (6, M)``; returns the rear stiffness."""
-        vx, t1, t2, v = x[State.vx], self.t1, self.t2, self.v
+        vx, t1, t2, v = x[_VX], self.t1, self.t2, self.v
         fzf, fzr, fyf, f_long = self.fzf, self.fzr, self.fyf, self.f_long
         limit_f, limit_r, room = self.limit_f, self.limit_r, self.room
         _max(vx, self.min_speed, out=v)
@@ -245,15 +251,15 @@ class _TrackingLaw:
         # steering_force_n: pure pursuit of the target, desired yaw rate, front force.
         _mul(self.lookahead_time, v, t1)
         _max(self.min_lookahead, t1, out=t1)
-        _sub(self.d_target, x[State.d], t2)
+        _sub(self.d_target, x[_D], t2)
         _atan2(t2, t1, t2)
-        _sub(t2, x[State.dpsi], t2)
+        _sub(t2, x[_DPSI], t2)
         _mul(self.heading_gain, t2, t2)
         _mul(kappa, v, t1)
         _add(t1, t2, room)  # r_des (the buffer is free until the saturation)
         _mul(self.share_front_mass, v, t1)
         _mul(t1, room, t1)
-        _sub(room, x[State.psidot], t2)
+        _sub(room, x[_PSIDOT], t2)
         _mul(self.yaw_term, t2, t2)
         _add(t1, t2, fyf)
         # The speed law: braking split by the static load shares, traction on the rear axle.
@@ -269,13 +275,13 @@ class _TrackingLaw:
         _mul(self.neg_08, limit_f, t1)
         _max(self.lower[0], t1, out=t1)
         _max(fxf, t1, out=fxf)
-        fxf = _min(fxf, self.upper[0], out=u[Input.fxf])
+        fxf = _min(fxf, self.upper[0], out=u[_FXF])
         _mul(self.neg_08, limit_r, t1)
         _max(self.lower[1], t1, out=t1)
         _max(fxr, t1, out=fxr)
         _mul(self.pos_08, limit_r, t2)
         _min(self.upper[1], t2, out=t2)
-        fxr = _min(fxr, t2, out=u[Input.fxr])
+        fxr = _min(fxr, t2, out=u[_FXR])
         _square(limit_f, t1)
         _square(fxf, t2)
         _sub(t1, t2, t1)
@@ -284,7 +290,7 @@ class _TrackingLaw:
         _mul(t1, self.lat_share, room)
         np.negative(room, t2)
         _max(fyf, t2, out=t1)
-        _min(t1, room, out=u[Input.fyf])
+        _min(t1, room, out=u[_FYF])
         # a_x of this step for the next step's loads: (F_xf + F_xr) / m
         _add(fxf, fxr, self.ax)
         _div(self.ax, self.mass, self.ax)

@@ -25,6 +25,9 @@ from mufusion.vehicle.planner_model import (
 # except for np.maximum, whose positional form is deprecated.
 _add, _sub, _mul, _div = np.add, np.subtract, np.multiply, np.divide
 _sin, _cos, _max = np.sin, np.cos, np.maximum
+# Plain ints: indexing with an IntEnum member costs three times as much.
+_S, _D, _DPSI, _PSIDOT, _VX, _VY = (int(i) for i in State)
+_FYF, _FXF, _FXR = (int(i) for i in Input)
 
 
 class BatchRK4:
@@ -56,24 +59,29 @@ class BatchRK4:
         if n_batch < 1:
             raise ValueError(f"n_batch must be >= 1, got {n_batch}")
         shape = (N_STATES, n_batch)
-        # Constants as full arrays: numpy converts a Python float operand on every call, which
-        # costs more than the operation; an array of the same value gives the same products.
-        self._lf, self._lr, self._iz, self._mass, self._one = (
-            np.full(n_batch, value)
+        # Constants as 0-d arrays: numpy converts a Python float operand on every call, which
+        # costs as much as the operation itself here; the 0-d array holds the same double.
+        self._lf, self._lr, self._iz, self._mass, self._one, self._floor, self._two = (
+            np.array(float(value))
             for value in (params.cog_to_front_axle_m, params.cog_to_rear_axle_m,
-                          params.yaw_inertia_kgm2, params.mass_kg, 1.0)
+                          params.yaw_inertia_kgm2, params.mass_kg, 1.0, MIN_SPEED_FOR_SLIP_MPS,
+                          2.0)
         )
-        self._floor = np.full(n_batch, MIN_SPEED_FOR_SLIP_MPS)
-        self._two = np.full(shape, 2.0)
-        self._dt_s = np.nan
-        self._half_dt, self._dt, self._sixth_dt = (np.empty(shape) for _ in "abc")
         self._k = [np.empty(shape) for _ in range(4)]
         self._k_rows = [tuple(k) for k in self._k]
         self._stage = np.empty(shape)
+        self._stage_rows = self._state_rows(self._stage)
         self._sum = np.empty(shape)
-        self._cos, self._sin, self._fyr, self._tmp, self._tmp2, self._tmp3 = (
-            np.empty(n_batch) for _ in "abcdef"
-        )
+        # (cos Δψ, sin Δψ) and, reversed, (sin Δψ, cos Δψ): multiplied by the rows (v_x, v_y)
+        # they give the four products of ṡ and ḋ in two operations.
+        self._trig = np.empty((2, n_batch))
+        self._trig_rows = tuple(self._trig)
+        self._trig_reversed = self._trig[::-1]
+        self._with_trig = np.empty((2, n_batch))
+        self._with_reversed = np.empty((2, n_batch))
+        self._with_trig_rows = tuple(self._with_trig)
+        self._with_reversed_rows = tuple(self._with_reversed)
+        self._fyr, self._tmp, self._tmp2 = (np.empty(n_batch) for _ in "abc")
         self._lf_fyf = np.empty(n_batch)
         self._fx_over_m = np.empty(n_batch)
 
@@ -91,70 +99,68 @@ class BatchRK4:
         ``curvature_1pm`` and ``rear_stiffness_n_per_rad``: shape ``(M,)``. Returns ``out``
         (which must not share memory with ``x``); equal bit for bit to ``rk4_step``.
         """
-        fyf = u[Input.fyf]
+        fyf = u[_FYF]
         # Input terms of ψ̈ and v̇_x: the same in the four evaluations.
         _mul(self._lf, fyf, self._lf_fyf)
-        _add(u[Input.fxf], u[Input.fxr], self._fx_over_m)
+        _add(u[_FXF], u[_FXR], self._fx_over_m)
         _div(self._fx_over_m, self._mass, self._fx_over_m)
         k1, k2, k3, k4 = self._k
         r1, r2, r3, r4 = self._k_rows
-        stage, total = self._stage, self._sum
-        if dt_s != self._dt_s:
-            self._half_dt.fill(0.5 * dt_s)
-            self._dt.fill(dt_s)
-            self._sixth_dt.fill(dt_s / 6.0)
-            self._dt_s = dt_s
-        half = self._half_dt
-        self._derivative(x, fyf, curvature_1pm, rear_stiffness_n_per_rad, r1)
+        stage, stage_rows, total = self._stage, self._stage_rows, self._sum
+        half, full = np.array(0.5 * dt_s), np.array(float(dt_s))
+        self._derivative(self._state_rows(x), fyf, curvature_1pm, rear_stiffness_n_per_rad, r1)
         _mul(half, k1, stage)
         _add(x, stage, stage)
-        self._derivative(stage, fyf, curvature_1pm, rear_stiffness_n_per_rad, r2)
+        self._derivative(stage_rows, fyf, curvature_1pm, rear_stiffness_n_per_rad, r2)
         _mul(half, k2, stage)
         _add(x, stage, stage)
-        self._derivative(stage, fyf, curvature_1pm, rear_stiffness_n_per_rad, r3)
-        _mul(self._dt, k3, stage)
+        self._derivative(stage_rows, fyf, curvature_1pm, rear_stiffness_n_per_rad, r3)
+        _mul(full, k3, stage)
         _add(x, stage, stage)
-        self._derivative(stage, fyf, curvature_1pm, rear_stiffness_n_per_rad, r4)
+        self._derivative(stage_rows, fyf, curvature_1pm, rear_stiffness_n_per_rad, r4)
         # x + dt/6 (k1 + 2 k2 + 2 k3 + k4), summed left to right as the reference does.
         _mul(self._two, k2, total)
         _add(k1, total, total)
         _mul(self._two, k3, stage)
         _add(total, stage, total)
         _add(total, k4, total)
-        _mul(self._sixth_dt, total, total)
+        _mul(np.array(dt_s / 6.0), total, total)
         return _add(x, total, out)
+
+    @staticmethod
+    def _state_rows(x: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Views of ``x``: d, Δψ, ψ̇, v_x, v_y and the two speed rows together."""
+        return x[_D], x[_DPSI], x[_PSIDOT], x[_VX], x[_VY], x[_VX : _VY + 1]
 
     def _derivative(
         self,
-        x: np.ndarray,
+        x_rows: tuple[np.ndarray, ...],
         fyf: np.ndarray,
         kappa: np.ndarray,
         rear_stiffness: np.ndarray,
         rows: tuple[np.ndarray, ...],
     ) -> None:
         """``frenet_bicycle_dynamics(x, u, κ, C_r)`` into ``rows`` (the input terms precomputed)."""
-        d, dpsi, psidot = x[State.d], x[State.dpsi], x[State.psidot]
-        vx, vy = x[State.vx], x[State.vy]
-        cos, sin, fyr, tmp, tmp2, tmp3 = (
-            self._cos, self._sin, self._fyr, self._tmp, self._tmp2, self._tmp3
-        )
-        s_dot = rows[State.s]
+        d, dpsi, psidot, vx, vy, speeds = x_rows
+        s_dot, d_dot, dpsi_dot, psi_ddot, vx_dot, vy_dot = rows
+        cos, sin = self._trig_rows
+        fyr, tmp, tmp2 = self._fyr, self._tmp, self._tmp2
+        vx_cos, vy_sin = self._with_trig_rows
+        vx_sin, vy_cos = self._with_reversed_rows
         _cos(dpsi, cos)
         _sin(dpsi, sin)
+        _mul(speeds, self._trig, self._with_trig)
+        _mul(speeds, self._trig_reversed, self._with_reversed)
         # ṡ = (v_x cosΔψ − v_y sinΔψ) / (1 − d κ)
-        _mul(vx, cos, tmp2)
-        _mul(vy, sin, tmp)
-        _sub(tmp2, tmp, tmp2)
+        _sub(vx_cos, vy_sin, tmp2)
         _mul(d, kappa, tmp)
         _sub(self._one, tmp, tmp)
         _div(tmp2, tmp, s_dot)
         # ḋ = v_x sinΔψ + v_y cosΔψ
-        _mul(vx, sin, tmp)
-        _mul(vy, cos, tmp2)
-        _add(tmp, tmp2, rows[State.d])
+        _add(vx_sin, vy_cos, d_dot)
         # Δψ̇ = ψ̇ − κ ṡ
         _mul(kappa, s_dot, tmp)
-        _sub(psidot, tmp, rows[State.dpsi])
+        _sub(psidot, tmp, dpsi_dot)
         # F_yr = C_r (l_r ψ̇ − v_y) / max(v_x, 1 m/s)  (rear_lateral_force_n)
         _max(vx, self._floor, out=tmp)
         _mul(self._lr, psidot, fyr)
@@ -164,15 +170,15 @@ class BatchRK4:
         # ψ̈ = (l_f F_yf − l_r F_yr) / I_z
         _mul(self._lr, fyr, tmp)
         _sub(self._lf_fyf, tmp, tmp)
-        _div(tmp, self._iz, rows[State.psidot])
+        _div(tmp, self._iz, psi_ddot)
         # v̇_x = (F_xf + F_xr)/m + v_y ψ̇
         _mul(vy, psidot, tmp)
-        _add(self._fx_over_m, tmp, rows[State.vx])
+        _add(self._fx_over_m, tmp, vx_dot)
         # v̇_y = (F_yf + F_yr)/m − v_x ψ̇
         _add(fyf, fyr, tmp)
         _div(tmp, self._mass, tmp)
-        _mul(vx, psidot, tmp3)
-        _sub(tmp, tmp3, rows[State.vy])
+        _mul(vx, psidot, tmp2)
+        _sub(tmp, tmp2, vy_dot)
 
 
 __all__ = ["BatchRK4"]
