@@ -29,6 +29,7 @@ from mufusion.road.geometry import Point
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import N_STATES, State
 from mufusion.vehicle.plant import PlantState
+from mufusion.vehicle.plant_state import PlantStateVector
 
 
 @dataclass(frozen=True)
@@ -147,8 +148,8 @@ class World:
         return x, y
 
     @staticmethod
-    def pose(x_plant: np.ndarray) -> tuple[float, float, float]:
-        """``(X, Y, ψ)`` of the centre of gravity."""
+    def pose(x_plant: np.ndarray | PlantStateVector) -> tuple[float, float, float]:
+        """``(X, Y, ψ)`` of the centre of gravity (plant state as an array or named floats)."""
         return (
             float(x_plant[PlantState.X]),
             float(x_plant[PlantState.Y]),
@@ -166,9 +167,9 @@ class World:
         return xf
 
     def friction_under_axles(
-        self, x_plant: np.ndarray, params: VehicleParams
+        self, x_plant: np.ndarray | PlantStateVector, params: VehicleParams
     ) -> tuple[float, float]:
-        """True friction under the front and the rear axle."""
+        """True friction under the front and the rear axle (state as an array or named floats)."""
         return self._mu_under_axles(self.pose(x_plant), params)
 
     def _mu_under_axles(

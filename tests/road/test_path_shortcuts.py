@@ -1,4 +1,4 @@
-"""A path without curvature answers κ(s) = +0.0 without the general expression, identically."""
+"""Shortcuts of ReferencePath that must answer exactly what the general expressions answer."""
 
 from __future__ import annotations
 
@@ -38,3 +38,26 @@ def test_a_path_with_an_arc_keeps_the_general_expression() -> None:
     s = np.linspace(-5.0, 40.0, 91)
     np.testing.assert_array_equal(path.curvature(s), _general(path, s))
     assert path.curvature(15.0) == 0.05
+
+
+PATHS = [
+    ReferencePath([PathSegment.straight(100.0), PathSegment.straight(200.0)]),
+    ReferencePath([PathSegment.straight(20.0), PathSegment.clothoid(30.0, 0.0, 0.05),
+                   PathSegment.arc(20.0, -2.0), PathSegment.straight(10.0)],
+                  start_xy_m=(3.0, -2.0), start_heading_rad=0.7),
+]
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("shape", [(), (1,), (40,), (3, 7)])
+def test_to_cartesian_is_bitwise_position_plus_heading(path: ReferencePath, shape) -> None:
+    rng = np.random.default_rng(len(shape))
+    s = rng.uniform(-20.0, path.length_m + 20.0, shape)
+    d = rng.uniform(-4.0, 4.0, shape)
+    dpsi = rng.uniform(-0.5, 0.5, shape)
+    x, y = path.position(s)
+    psi_path = path.heading(s)
+    expected = (x - d * np.sin(psi_path), y + d * np.cos(psi_path), psi_path + dpsi)
+    for got, want in zip(path.to_cartesian(s, d, dpsi), expected, strict=True):
+        assert got.shape == np.shape(want)
+        np.testing.assert_array_equal(got, want)
