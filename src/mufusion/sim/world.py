@@ -20,7 +20,7 @@ from mufusion.road import (
     PointTracker,
     Road,
     footprint_lane_margins,
-    obstacle_active,
+    obstacle_active_at,
     obstacle_corners,
     rectangle_corner_points,
     signed_clearance_points,
@@ -184,7 +184,7 @@ class World:
                 self._trackers.rear_axle.mu_at(rear_x, rear_y))
 
     def active_obstacles(self, t_s: float, s_ego_m: float) -> list[Obstacle]:
-        return [o for o in self.road.obstacles if bool(obstacle_active(o, s_ego_m, t_s))]
+        return [o for o in self.road.obstacles if obstacle_active_at(o, s_ego_m, t_s)]
 
     def planner_obstacles(
         self, t_s: float, s_ego_m: float, behind_m: float = float("inf")
@@ -226,7 +226,7 @@ class World:
         any_active = False
         s_c: float | None = None
         for obstacle, points in zip(self.road.obstacles, self._obstacle_points, strict=True):
-            if not bool(obstacle_active(obstacle, s_ego_m, t_s)):
+            if not obstacle_active_at(obstacle, s_ego_m, t_s):
                 continue
             any_active = True
             clearance = min(clearance, signed_clearance_points(corners, points))

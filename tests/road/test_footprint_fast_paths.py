@@ -1,4 +1,4 @@
-"""signed_clearance_points equals, bit for bit, the loop over the point-segment distance."""
+"""The footprint checks' plain-float paths answer exactly what the general ones answer."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import math
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from mufusion.road import Obstacle, obstacle_active, obstacle_active_at
 from mufusion.road.geometry import (
     _penetration_scalar,
     _point_segment_distance_scalar,
@@ -50,3 +51,16 @@ def test_clearance_with_a_nan_corner_matches_the_reference() -> None:
     b[2] = (math.nan, b[2][1])
     got, expected = signed_clearance_points(a, b), _reference(a, b)
     assert got == expected or (math.isnan(got) and math.isnan(expected))
+
+
+_maybe = st.one_of(st.none(), st.floats(-50.0, 200.0))
+_value = st.one_of(st.floats(-50.0, 200.0), st.just(math.nan))
+
+
+@settings(max_examples=300, deadline=None)
+@given(appear_s=_maybe, appear_t=_maybe, ego_s=_value, t=_value)
+def test_obstacle_active_at_is_obstacle_active(appear_s, appear_t, ego_s, t) -> None:
+    obstacle = Obstacle(100.0, 0.0, 2.0, 2.0, appear_at_ego_s_m=appear_s, appear_at_time_s=appear_t)
+    got = obstacle_active_at(obstacle, ego_s, t)
+    assert type(got) is bool
+    assert got == bool(obstacle_active(obstacle, ego_s, t))
