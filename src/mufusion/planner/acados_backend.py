@@ -148,10 +148,10 @@ class AcadosBackend:
         if previous is None or previous.shape != values.shape:
             rows = range(len(stages))
         elif len(values) == 1:
-            rows = range(len(stages)) if np.any(values != previous) else range(0)
+            rows = range(len(stages)) if (values != previous).any() else range(0)
         else:
             differs = (values != previous).reshape(len(stages), -1)
-            rows = np.flatnonzero(differs.any(axis=1)).tolist()
+            rows = differs.any(axis=1).nonzero()[0].tolist()
         uniform = len(values) == 1
         for i in rows:
             setter(stages[i], field, values[0 if uniform else i])

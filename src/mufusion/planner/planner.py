@@ -153,7 +153,7 @@ class TractionAdaptivePlanner:
         n, dt = self.config.horizon_steps, self.config.dt_s
         prev = self._prev
         if prev is not None and np.all(np.isfinite(prev.states)):
-            shift = int(np.clip(round((t_s - prev.t0_s) / dt), 0, n))
+            shift = int(min(max(round((t_s - prev.t0_s) / dt), 0), n))  # np.clip's value
             if shift <= n - 1 and abs(prev.states[shift, State.s] - x0[State.s]) < 10.0:
                 xs = np.concatenate([prev.states[shift:], np.repeat(prev.states[-1:], shift, 0)])
                 us = np.concatenate([prev.inputs[shift:], np.repeat(prev.inputs[-1:], shift, 0)])

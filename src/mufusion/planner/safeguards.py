@@ -122,7 +122,9 @@ class SanitizedFriction:
     def __call__(self, s_m: np.ndarray) -> np.ndarray:
         s = np.asarray(s_m, dtype=float)
         try:
-            raw = np.broadcast_to(np.asarray(self._source(s), dtype=float), s.shape)
+            raw = np.asarray(self._source(s), dtype=float)
+            if raw.shape != s.shape:
+                raw = np.broadcast_to(raw, s.shape)
         except Exception as exc:  # a broken friction source degrades, never raises
             _log.warning("friction estimate unusable (%r); sanitising every stage", exc)
             raw = np.full(s.shape, np.nan)

@@ -23,6 +23,7 @@ from mufusion.road.obstacles import (
     Obstacle,
     footprint_clearance_m,
     obstacle_active,
+    obstacle_active_at,
     obstacle_corners,
 )
 from mufusion.road.path import PathSegment, ReferencePath
@@ -48,6 +49,7 @@ __all__ = [
     "left_ego_lane",
     "left_road",
     "obstacle_active",
+    "obstacle_active_at",
     "obstacle_corners",
     "opposing_lane_depth_m",
     "rectangle_corner_points",

@@ -164,10 +164,23 @@ def signed_clearance_points(corners_a: Sequence[Point], corners_b: Sequence[Poin
     penetration = _penetration_scalar(corners_a, corners_b)
     if penetration > 0.0:
         return -penetration
+    # _point_segment_distance_scalar for every corner against every edge, inlined with each
+    # edge's vector and squared length computed once (the same expressions, so the same
+    # values); ``if x < distance`` is ``min(distance, x)``, NaN included.
+    hypot = math.hypot
     distance = math.inf
     for points, poly in ((corners_a, corners_b), (corners_b, corners_a)):
-        for k in range(len(poly)):
-            a, b = poly[k], poly[(k + 1) % len(poly)]
-            for p in points:
-                distance = min(distance, _point_segment_distance_scalar(p, a, b))
+        n = len(poly)
+        for k in range(n):
+            (ax, ay), (bx, by) = poly[k], poly[(k + 1) % n]
+            abx, aby = bx - ax, by - ay
+            squared = abx * abx + aby * aby
+            squared = 1e-300 if 1e-300 > squared else squared  # max(squared, 1e-300)
+            for px, py in points:
+                t = ((px - ax) * abx + (py - ay) * aby) / squared
+                t = 0.0 if 0.0 > t else t  # max(t, 0.0)
+                t = 1.0 if 1.0 < t else t  # min(t, 1.0)
+                gap = hypot(px - (ax + t * abx), py - (ay + t * aby))
+                if gap < distance:
+                    distance = gap
     return distance

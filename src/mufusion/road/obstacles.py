@@ -80,6 +80,25 @@ def obstacle_active(
     return active
 
 
+def obstacle_active_at(obstacle: Obstacle, ego_s_m: float, time_s: float) -> bool:
+    """:func:`obstacle_active` for one ego progress [m] and time [s], in plain floats.
+
+    The same comparisons (NaN compares false) without numpy's per-call cost: the closed loop
+    asks at every controller tick.
+
+    Examples
+    --------
+    >>> obstacle_active_at(Obstacle.pop_up(100.0, 0.0, 20.0), 80.0, 0.0)
+    True
+    """
+    if obstacle.appear_at_ego_s_m is None and obstacle.appear_at_time_s is None:
+        return True
+    return bool(
+        (obstacle.appear_at_ego_s_m is not None and ego_s_m >= obstacle.appear_at_ego_s_m)
+        or (obstacle.appear_at_time_s is not None and time_s >= obstacle.appear_at_time_s)
+    )
+
+
 def obstacle_corners(obstacle: Obstacle, path: ReferencePath) -> np.ndarray:
     """Cartesian corners of the obstacle, shape ``(4, 2)``."""
     x, y, heading = path.to_cartesian(obstacle.s_m, obstacle.d_m, 0.0)

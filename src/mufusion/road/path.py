@@ -12,8 +12,8 @@ that overshoots still has well-defined Frenet coordinates.
 
 from __future__ import annotations
 
-import bisect
 import math
+from bisect import bisect_right as _bisect_right
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -112,6 +112,9 @@ class ReferencePath:
         self._dk = np.array(
             [(seg.curvature_end_1pm - seg.curvature_start_1pm) / seg.length_m for seg in segments]
         )
+        # No curvature anywhere (+0.0 at every start, no change): κ(s) is +0.0 for every s, which
+        # is what the general expression gives (+0.0 + 0.0·σ), without its dozen array calls.
+        self._flat = not (np.any(self._k0) or np.any(self._dk) or np.any(np.signbit(self._k0)))
         headings = [float(start_heading_rad)]
         for k0, dk, length in zip(self._k0, self._dk, lengths, strict=True):
             headings.append(headings[-1] + k0 * length + 0.5 * dk * length**2)
@@ -145,6 +148,7 @@ class ReferencePath:
         # it serves, so one search finds both).
         anchor_segment = self._segment_index(self._anchor_s).tolist()
         self._py_anchor_s = self._anchor_s.tolist()
+        self._py_last_anchor = len(self._py_anchor_s) - 2
         self._py_anchors = [
             (a, x, y, float(self._seg_start[i]), float(self._k0[i]), float(self._dk[i]),
              float(self._psi0[i]))
@@ -167,6 +171,8 @@ class ReferencePath:
     def curvature(self, s_m: np.ndarray | float) -> np.ndarray:
         """Path curvature κ(s) [1/m], left positive; 0 on the straight extensions."""
         s = np.asarray(s_m, dtype=float)
+        if self._flat:
+            return np.zeros(s.shape)
         i = self._segment_index(s)
         sigma = s - self._seg_start[i]
         inside = (s >= 0.0) & (s <= self.length_m)
@@ -183,7 +189,7 @@ class ReferencePath:
         """
         if not 0.0 <= s_m <= self.length_m:
             return 0.0
-        j = min(max(bisect.bisect_right(self._py_anchor_s, s_m) - 1, 0),
+        j = min(max(_bisect_right(self._py_anchor_s, s_m) - 1, 0),
                 len(self._py_anchor_s) - 2)
         _, _, _, start, k0, dk, _ = self._py_anchors[j]
         return k0 + dk * (s_m - start)
@@ -230,9 +236,14 @@ class ReferencePath:
 
     def _frame_scalar(self, s: float) -> tuple[float, float, float, float]:
         """Plain-float version of :meth:`_frame` for one point."""
-        clamped = min(max(s, 0.0), self.length_m)
-        j = min(max(bisect.bisect_right(self._py_anchor_s, clamped) - 1, 0),
-                len(self._py_anchor_s) - 2)
+        # min(max(s, 0), length) and min(max(j, 0), last) as comparisons (the same values,
+        # NaN and signed zeros included, without the built-in calls).
+        clamped = 0.0 if 0.0 > s else s
+        length = self.length_m
+        if length < clamped:
+            clamped = length
+        j = _bisect_right(self._py_anchor_s, clamped) - 1
+        j = self._py_last_anchor if self._py_last_anchor < j else (0 if 0 > j else j)
         a, x, y, start, k0, dk, psi0 = self._py_anchors[j]
         sigma = clamped - start
         heading = psi0 + k0 * sigma + 0.5 * dk * sigma * sigma
@@ -262,13 +273,16 @@ class ReferencePath:
         self, px: float, py: float, s: float, max_iterations: int
     ) -> tuple[float, float, float, bool]:
         """Foot point of ``(px, py)`` by Newton from ``s``: ``(s, d, heading, converged)``."""
+        frame, cos, sin = self._frame_scalar, math.cos, math.sin
         for _ in range(max_iterations):
-            cx, cy, heading, kappa = self._frame_scalar(s)
-            tx, ty = math.cos(heading), math.sin(heading)
+            cx, cy, heading, kappa = frame(s)
+            tx, ty = cos(heading), sin(heading)
             ex, ey = px - cx, py - cy
             d = -ex * ty + ey * tx
-            # Foot point condition (P − C(s))·t(s) = 0; its derivative is −(1 − κ d).
-            step = (ex * tx + ey * ty) / max(1.0 - kappa * d, 0.1)
+            # Foot point condition (P − C(s))·t(s) = 0; its derivative is −(1 − κ d), floored
+            # at 0.1 (max(·, 0.1) as a comparison).
+            slope = 1.0 - kappa * d
+            step = (ex * tx + ey * ty) / (0.1 if 0.1 > slope else slope)
             s += step
             if abs(step) < 1e-9:
                 # At the converged foot point, a step this short moves d by O(κ·step²) (below
@@ -363,8 +377,8 @@ class ReferencePath:
         s, d, dpsi = np.broadcast_arrays(
             np.asarray(s_m, float), np.asarray(d_m, float), np.asarray(dpsi_rad, float)
         )
-        x, y = self.position(s)
-        psi_path = self.heading(s)
+        # _frame's heading is heading(s): the same clamping, segment and expression.
+        x, y, psi_path, _ = (v.reshape(s.shape) for v in self._frame(s.reshape(-1)))
         return x - d * np.sin(psi_path), y + d * np.cos(psi_path), psi_path + dpsi
 
     def to_frenet(

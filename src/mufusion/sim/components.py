@@ -19,7 +19,7 @@ from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan, PlannerObstacle
 from mufusion.planner.ocp import PlannerMode
 from mufusion.vehicle.actuators import ActuatorCommand
-from mufusion.vehicle.plant import PlantOutput
+from mufusion.vehicle.plant import PlantOutput, PlantStateVector
 
 PlanningMode = PlannerMode
 
@@ -134,6 +134,11 @@ class PlantModel(Protocol):
 
     @property
     def x(self) -> np.ndarray: ...
+
+    @property
+    def state(self) -> PlantStateVector:
+        """The state as named floats (what ``x`` holds, without building an array)."""
+        ...
 
     def step(
         self, command: ActuatorCommand, mu_front: float, mu_rear: float

@@ -178,11 +178,13 @@ class ClosedLoop:
         s_ego = float(xf[State.s])
         plan: Plan | None = None
         estimate: FrictionEstimate | None = None
+        x_plant = self.plant.x
         for i in range(n_steps + 1):
             t = i * dt
-            x_plant = self.plant.x
+            state = self.plant.state  # named floats; the array only for the ticks below
             control_tick = i % rates.controller_every == 0
             if control_tick:
+                x_plant = np.asarray(state)
                 # The planner's rate divides the controller's, so this also serves planning steps.
                 xf = self.world.frenet_state(x_plant)
                 s_ego = float(xf[State.s])
@@ -203,7 +205,7 @@ class ClosedLoop:
                 if status.in_collision or s_ego >= road_end:
                     break
 
-            mu_front, mu_rear = self.world.friction_under_axles(x_plant, self.params)
+            mu_front, mu_rear = self.world.friction_under_axles(state, self.params)
             last = self.plant.step(command, mu_front, mu_rear)
             util_window = max(util_window, last.utilization_front, last.utilization_rear)
             self.friction.observe(

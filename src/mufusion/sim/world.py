@@ -20,7 +20,7 @@ from mufusion.road import (
     PointTracker,
     Road,
     footprint_lane_margins,
-    obstacle_active,
+    obstacle_active_at,
     obstacle_corners,
     rectangle_corner_points,
     signed_clearance_points,
@@ -29,6 +29,7 @@ from mufusion.road.geometry import Point
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import N_STATES, State
 from mufusion.vehicle.plant import PlantState
+from mufusion.vehicle.plant_state import PlantStateVector
 
 
 @dataclass(frozen=True)
@@ -147,8 +148,8 @@ class World:
         return x, y
 
     @staticmethod
-    def pose(x_plant: np.ndarray) -> tuple[float, float, float]:
-        """``(X, Y, ψ)`` of the centre of gravity."""
+    def pose(x_plant: np.ndarray | PlantStateVector) -> tuple[float, float, float]:
+        """``(X, Y, ψ)`` of the centre of gravity (plant state as an array or named floats)."""
         return (
             float(x_plant[PlantState.X]),
             float(x_plant[PlantState.Y]),
@@ -166,9 +167,9 @@ class World:
         return xf
 
     def friction_under_axles(
-        self, x_plant: np.ndarray, params: VehicleParams
+        self, x_plant: np.ndarray | PlantStateVector, params: VehicleParams
     ) -> tuple[float, float]:
-        """True friction under the front and the rear axle."""
+        """True friction under the front and the rear axle (state as an array or named floats)."""
         return self._mu_under_axles(self.pose(x_plant), params)
 
     def _mu_under_axles(
@@ -183,7 +184,7 @@ class World:
                 self._trackers.rear_axle.mu_at(rear_x, rear_y))
 
     def active_obstacles(self, t_s: float, s_ego_m: float) -> list[Obstacle]:
-        return [o for o in self.road.obstacles if bool(obstacle_active(o, s_ego_m, t_s))]
+        return [o for o in self.road.obstacles if obstacle_active_at(o, s_ego_m, t_s)]
 
     def planner_obstacles(
         self, t_s: float, s_ego_m: float, behind_m: float = float("inf")
@@ -225,7 +226,7 @@ class World:
         any_active = False
         s_c: float | None = None
         for obstacle, points in zip(self.road.obstacles, self._obstacle_points, strict=True):
-            if not bool(obstacle_active(obstacle, s_ego_m, t_s)):
+            if not obstacle_active_at(obstacle, s_ego_m, t_s):
                 continue
             any_active = True
             clearance = min(clearance, signed_clearance_points(corners, points))
