@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import json
 import multiprocessing
+import os
 import signal
+import struct
 import subprocess
 import time
 
@@ -62,6 +64,29 @@ def test_ctrl_c_in_the_parent_stops_the_pool_and_cancels_queued_runs(tmp_path):
     assert multiprocessing.active_children() == []
     time.sleep(2.0)  # and nothing queued starts later
     assert [p.name for p in runs_dir.iterdir()] == [done[0].name]
+
+
+def test_stopping_the_pool_ends_a_manager_thread_stuck_on_a_partial_result():
+    # What a worker terminated in the middle of sending its result leaves behind: a length
+    # header promising 1 MB and three bytes of it. The executor's manager thread blocks reading
+    # the rest; unless stopping the pool ends it, the interpreter's exit joins it for ever.
+    from concurrent.futures import ProcessPoolExecutor
+
+    pool = ProcessPoolExecutor(max_workers=1)
+    pool.submit(time.sleep, 30.0)
+    deadline = time.monotonic() + 10.0
+    while not pool._processes and time.monotonic() < deadline:
+        time.sleep(0.05)
+    manager = pool._executor_manager_thread
+    os.write(pool._result_queue._writer.fileno(), struct.pack("!i", 1_000_000) + b"abc")
+    time.sleep(0.5)
+    assert manager.is_alive()  # blocked on the partial message
+    started = time.monotonic()
+    engines._stop_pool(pool)
+    manager.join(timeout=15.0)
+    assert not manager.is_alive()
+    assert time.monotonic() - started < 15.0
+    assert multiprocessing.active_children() == []
 
 
 def test_run_campaign_returns_triples_and_raises_naming_failed_runs(tmp_path, monkeypatch):

@@ -21,12 +21,13 @@ import logging
 import os
 import signal
 import tempfile
+import threading
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal, get_args
+from typing import Any, Literal, cast, get_args
 
 from threadpoolctl import threadpool_limits
 
@@ -194,6 +195,10 @@ def _stop_pool(pool: ProcessPoolExecutor) -> None:
     # The pool's process table is read before and after the shutdown request: the executor's
     # manager thread may drop it (or a process may appear) in between.
     processes = {p.pid: p for p in list((pool._processes or {}).values())}
+    # The shutdown request drops these references; the manager thread keeps using them.
+    # (typeshed types the manager thread as the wake-up helper and hides the queue's writer.)
+    manager = cast("threading.Thread | None", pool._executor_manager_thread)
+    result_queue: Any = pool._result_queue
     pool.shutdown(wait=False, cancel_futures=True)
     processes.update({p.pid: p for p in list((pool._processes or {}).values())})
     for process in processes.values():
@@ -201,6 +206,18 @@ def _stop_pool(pool: ProcessPoolExecutor) -> None:
             process.terminate()
     for process in processes.values():
         process.join(timeout=10.0)
+        if process.is_alive():
+            process.kill()
+            process.join(timeout=10.0)
+    # A worker terminated while sending its result leaves a partial message in the result
+    # pipe: the executor's manager thread then blocks reading the rest, and the interpreter's
+    # exit, which joins that thread, hangs. With the workers gone the parent holds the pipe's
+    # last write end; closing it turns the partial read into end-of-file, which the thread
+    # takes for a broken pool and ends on. (CPython 3.11-3.13 internals, as _processes above.)
+    if result_queue is not None:
+        result_queue._writer.close()
+    if manager is not None:
+        manager.join(timeout=10.0)
 
 
 def _dispatch_ray(
