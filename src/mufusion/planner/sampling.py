@@ -15,16 +15,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.planner.ocp import PlannerObstacle, longitudinal_force_bounds_n
-from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
+from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
-    N_STATES,
     Input,
     State,
     frenet_bicycle_dynamics,
+    normal_loads_n,
     rear_cornering_stiffness_n_per_rad,
 )
-from mufusion.vehicle.planner_rk4 import BatchRK4
 from mufusion.vehicle.surface_tires import SurfaceTireTable
 
 # Cost of one metre of obstacle/road violation relative to tracking (per stage) [1/m].
@@ -140,158 +139,42 @@ def candidate_rollouts(
     """
     d_t, v_t = (a.ravel() for a in np.meshgrid(lateral_targets_m, speed_targets_mps))
     m_count = d_t.size
-    # The trajectories are written in place. Each step is the straightforward formulation's
-    # arithmetic operand by operand (the tracking law below, rk4_step in BatchRK4) in numpy
-    # calls on preallocated buffers, so the result is the straightforward loop's bit for bit
-    # (tests/planner/test_sampling_rollouts.py compares them).
-    states = np.empty((horizon_steps + 1, N_STATES, m_count))
-    inputs = np.empty((horizon_steps, N_INPUTS, m_count))
-    states[0] = np.asarray(x0, dtype=float)[:, None]
-    rk4 = BatchRK4(params, m_count)
-    law = _TrackingLaw(params, config, utilization_factor, d_t, v_t)
-    for k in range(horizon_steps):
-        x, u, x_next = states[k], inputs[k], states[k + 1]
-        s_k = x[_S]
-        kappa = _batch(curvature_of_s(s_k), m_count)
-        mu = _batch(mu_hat_of_s(s_k), m_count)
-        c_r = law.inputs(x, kappa, mu, u, stiffness_table)
-        rk4.step(x, u, kappa, c_r, dt_s, x_next)
-        vx_next = x_next[_VX]
-        np.maximum(vx_next, _ZERO, out=vx_next)
-    return states, inputs
-
-
-def _batch(values: np.ndarray | float, m_count: int) -> np.ndarray:
-    """``values`` as a float array of shape ``(m_count,)`` (broadcast as ``values * ones``)."""
-    array = np.asarray(values, dtype=float)
-    return array if array.shape == (m_count,) else array * np.ones(m_count)
-
-
-# Positional ``out`` (numpy's keyword handling costs more than the arithmetic on these small
-# arrays), except for maximum/minimum, whose positional form is deprecated.
-_add, _sub, _mul, _div = np.add, np.subtract, np.multiply, np.divide
-_max, _min, _square, _sqrt, _atan2 = np.maximum, np.minimum, np.square, np.sqrt, np.arctan2
-_ZERO = np.array(0.0)
-# Plain ints: indexing with an IntEnum member costs three times as much.
-_S, _D, _DPSI, _PSIDOT, _VX = (int(i) for i in (State.s, State.d, State.dpsi, State.psidot,
-                                                  State.vx))
-_FYF, _FXF, _FXR = (int(i) for i in Input)
-
-
-def _const(value: float) -> np.ndarray:
-    # A 0-d array: numpy converts a Python float operand on every call, which costs as much
-    # as the operation itself here; the 0-d array holds the same double.
-    return np.array(float(value))
-
-
-class _TrackingLaw:
-    """The roll-outs' inputs for a batch of M candidates, in numpy calls on fixed buffers.
-
-    Operand by operand what the straightforward formulation computes per step (the tests
-    hold the two equal bit for bit): :func:`normal_loads_n` under the previous step's
-    acceleration, :func:`rear_cornering_stiffness_n_per_rad`, :func:`steering_force_n`, the
-    speed law, then the saturation at the friction limits (longitudinal first, the lateral
-    force gets what remains).
-    """
-
-    def __init__(self, params: VehicleParams, config: SamplingConfig, utilization: float,
-                 d_target_m: np.ndarray, v_target_mps: np.ndarray) -> None:
-        self.params, self.utilization = params, utilization
-        m, lf, wheelbase = params.mass_kg, params.cog_to_front_axle_m, params.wheelbase_m
-        share_front = params.cog_to_rear_axle_m / wheelbase
-        lower, upper = longitudinal_force_bounds_n(params)
-        # As normal_loads_n, steering_force_n and rear_cornering_stiffness_n_per_rad group them.
-        self.g_lr = _const(GRAVITY_MPS2 * params.cog_to_rear_axle_m)
-        self.g_lf = _const(GRAVITY_MPS2 * lf)
-        self.h, self.mass, self.wheelbase = (_const(v) for v in (params.cog_height_m, m,
-                                                                 wheelbase))
-        # The vehicle's tire: C_r = (stiffness per load) · F_zr, with that factor exactly.
-        self.stiffness = _const(rear_cornering_stiffness_n_per_rad(params, 1.0, utilization))
-        self.min_speed, self.min_lookahead = _const(1.0), _const(config.min_lookahead_m)
-        self.lookahead_time = _const(config.lookahead_time_s)
-        self.heading_gain = _const(config.heading_gain_1_per_s)
-        self.share_front_mass = _const(share_front * m)
-        self.yaw_term = _const(params.yaw_inertia_kgm2 / lf * config.yaw_rate_gain_1_per_s)
-        self.long_gain = _const(m * config.speed_gain_1_per_s)
-        self.share_front, self.share_rear = _const(share_front), _const(1.0 - share_front)
-        self.mu_factor = _const(utilization)
-        self.lower = [_const(v) for v in lower.tolist()]
-        self.upper = [_const(v) for v in upper.tolist()]
-        self.neg_08, self.pos_08, self.lat_share = _const(-0.8), _const(0.8), _const(0.95)
-        self.d_target, self.v_target = d_target_m, v_target_mps
-        n = d_target_m.size
-        self.ax = np.zeros(n)  # the previous step's longitudinal acceleration
-        (self.v, self.fzf, self.fzr, self.fyf, self.f_long, self.limit_f, self.limit_r,
-         self.room, self.t1, self.t2) = (np.empty(n) for _ in range(10))
-        self.braking = np.empty(n, dtype=bool)
-
-    def inputs(self, x: np.ndarray, kappa: np.ndarray, mu: np.ndarray, u: np.ndarray,
-               stiffness_table: SurfaceTireTable | None) -> np.ndarray:
-        """Write the inputs ``u (3, M)`` at states ``x (6, M)``; returns the rear stiffness."""
-        vx, t1, t2, v = x[_VX], self.t1, self.t2, self.v
-        fzf, fzr, fyf, f_long = self.fzf, self.fzr, self.fyf, self.f_long
-        limit_f, limit_r, room = self.limit_f, self.limit_r, self.room
-        _max(vx, self.min_speed, out=v)
-        # normal_loads_n: F_zf = m (g l_r − a_x h) / L, F_zr = m (g l_f + a_x h) / L
-        _mul(self.ax, self.h, t1)
-        _sub(self.g_lr, t1, fzf)
-        _mul(self.mass, fzf, fzf)
-        _div(fzf, self.wheelbase, fzf)
-        _add(self.g_lf, t1, fzr)
-        _mul(self.mass, fzr, fzr)
-        _div(fzr, self.wheelbase, fzr)
-        if stiffness_table is None:  # the vehicle's tire: μ̂ does not enter
-            c_r = _mul(self.stiffness, fzr)
-        else:
-            # A diverged candidate (discarded by the caller) may sit where μ̂ is not finite.
-            mu_stiffness = np.where(np.isfinite(mu) & (mu > 0.0), mu, 1.0)
-            c_r = rear_cornering_stiffness_n_per_rad(
-                self.params, fzr, self.utilization, mu_hat=mu_stiffness, table=stiffness_table
-            )
-        # steering_force_n: pure pursuit of the target, desired yaw rate, front force.
-        _mul(self.lookahead_time, v, t1)
-        _max(self.min_lookahead, t1, out=t1)
-        _sub(self.d_target, x[_D], t2)
-        _atan2(t2, t1, t2)
-        _sub(t2, x[_DPSI], t2)
-        _mul(self.heading_gain, t2, t2)
-        _mul(kappa, v, t1)
-        _add(t1, t2, room)  # r_des (the buffer is free until the saturation)
-        _mul(self.share_front_mass, v, t1)
-        _mul(t1, room, t1)
-        _sub(room, x[_PSIDOT], t2)
-        _mul(self.yaw_term, t2, t2)
-        _add(t1, t2, fyf)
-        # The speed law: braking split by the static load shares, traction on the rear axle.
-        _sub(self.v_target, vx, f_long)
-        _mul(self.long_gain, f_long, f_long)
-        np.less(f_long, _ZERO, self.braking)
-        fxf = np.where(self.braking, _mul(self.share_front, f_long, t1), _ZERO)
-        fxr = np.where(self.braking, _mul(self.share_rear, f_long, t2), f_long)
-        # Saturation at λ μ̂ F_z: np.minimum(np.maximum(...)) is np.clip's definition.
-        _mul(self.mu_factor, mu, t1)
-        _mul(t1, fzf, limit_f)
-        _mul(t1, fzr, limit_r)
-        _mul(self.neg_08, limit_f, t1)
-        _max(self.lower[0], t1, out=t1)
-        _max(fxf, t1, out=fxf)
-        fxf = _min(fxf, self.upper[0], out=u[_FXF])
-        _mul(self.neg_08, limit_r, t1)
-        _max(self.lower[1], t1, out=t1)
-        _max(fxr, t1, out=fxr)
-        _mul(self.pos_08, limit_r, t2)
-        _min(self.upper[1], t2, out=t2)
-        fxr = _min(fxr, t2, out=u[_FXR])
-        _square(limit_f, t1)
-        _square(fxf, t2)
-        _sub(t1, t2, t1)
-        _max(t1, _ZERO, out=t1)
-        _sqrt(t1, t1)
-        _mul(t1, self.lat_share, room)
-        np.negative(room, t2)
-        _max(fyf, t2, out=t1)
-        _min(t1, room, out=u[_FYF])
-        # a_x of this step for the next step's loads: (F_xf + F_xr) / m
-        _add(fxf, fxr, self.ax)
-        _div(self.ax, self.mass, self.ax)
-        return c_r
+    x = np.repeat(np.asarray(x0, dtype=float)[:, None], m_count, axis=1)
+    lower, upper = longitudinal_force_bounds_n(params)
+    m = params.mass_kg
+    share_front = params.cog_to_rear_axle_m / params.wheelbase_m
+    xs, us = [x], []
+    ax = np.zeros(m_count)
+    for _ in range(horizon_steps):
+        v = np.maximum(x[State.vx], 1.0)
+        kappa = np.asarray(curvature_of_s(x[State.s]), dtype=float) * np.ones(m_count)
+        mu = np.asarray(mu_hat_of_s(x[State.s]), dtype=float) * np.ones(m_count)
+        fzf, fzr = normal_loads_n(ax, params)
+        # A diverged candidate (discarded by the caller) may sit where μ̂ is not finite.
+        mu_stiffness = np.where(np.isfinite(mu) & (mu > 0.0), mu, 1.0)
+        c_r = rear_cornering_stiffness_n_per_rad(
+            params, fzr, utilization_factor, mu_hat=mu_stiffness, table=stiffness_table
+        )
+        fyf = steering_force_n(x, d_t, kappa, v, params, config)
+        f_long = m * config.speed_gain_1_per_s * (v_t - x[State.vx])
+        fxf = np.where(f_long < 0.0, share_front * f_long, 0.0)
+        fxr = np.where(f_long < 0.0, (1.0 - share_front) * f_long, f_long)
+        # Saturate at the friction limits (longitudinal first, lateral gets what remains).
+        limit_f = utilization_factor * mu * fzf
+        limit_r = utilization_factor * mu * fzr
+        # np.minimum(np.maximum(...)) is np.clip's definition, at a fraction of its overhead.
+        fxf = np.minimum(np.maximum(fxf, np.maximum(lower[0], -0.8 * limit_f)), upper[0])
+        fxr = np.minimum(
+            np.maximum(fxr, np.maximum(lower[1], -0.8 * limit_r)),
+            np.minimum(upper[1], 0.8 * limit_r),
+        )
+        lat_room = np.sqrt(np.maximum(limit_f**2 - fxf**2, 0.0)) * 0.95
+        fyf = np.minimum(np.maximum(fyf, -lat_room), lat_room)
+        u = np.stack([fyf, fxf, fxr])
+        u[Input.fyf], u[Input.fxf], u[Input.fxr] = fyf, fxf, fxr
+        x = rk4_step(x, u, kappa, c_r, params, dt_s)
+        x[State.vx] = np.maximum(x[State.vx], 0.0)
+        ax = (fxf + fxr) / m
+        xs.append(x)
+        us.append(u)
+    return np.stack(xs), np.stack(us).reshape(horizon_steps, N_INPUTS, m_count)
