@@ -14,9 +14,11 @@ from mufusion.sim.supervision import (
     LaneRecoverySettings,
     Prober,
     ProbingSettings,
-    lane_violation_m,
+    planned_footprint_violation_m,
     relaxed_estimate,
 )
+from mufusion.vehicle.params import CAR, TRUCK
+from mufusion.vehicle.planner_model import State
 
 GRID = np.arange(0.0, 51.0)
 
@@ -84,11 +86,56 @@ def test_relaxation_moves_towards_the_mean_only() -> None:
     above = _estimate(mu_hat=0.4, mean=0.3)
     assert relaxed_estimate(above, 1.0) is None  # never lowered, nothing to gain
     assert relaxed_estimate(_estimate(fused=False), 1.0) is None
-    assert lane_violation_m(np.array([0.0, 0.5, -0.7]), (-0.45, 0.45)) == pytest.approx(0.25)
     with pytest.raises(ValueError, match=r"lane_recovery\.steps"):
         LaneRecoverySettings(steps=(0.5, 0.25))
     with pytest.raises(ValueError, match=r"probing\.max_decel_mps2"):
         ProbingSettings(max_decel_mps2=9.0)
+
+
+def _states(d_m, dpsi_rad=0.0) -> np.ndarray:
+    x = np.zeros((np.size(d_m), 6))
+    x[:, State.d], x[:, State.dpsi] = d_m, dpsi_rad
+    return x
+
+
+def test_footprint_violation_of_an_aligned_body_is_the_reference_points() -> None:
+    # Aligned with a straight lane the corners sit half a width beside the reference point, so
+    # the footprint leaves the band exactly as far as the point leaves its bounds.
+    x = _states([0.0, 0.5, -0.7])
+    assert planned_footprint_violation_m(x, 0.0, (-0.45, 0.45), TRUCK) == pytest.approx(0.25)
+    assert planned_footprint_violation_m(x[:1], 0.0, (-0.45, 0.45), TRUCK) == 0.0
+
+
+def test_footprint_violation_counts_the_swing_of_a_yawed_body() -> None:
+    # Yawed 0.3 rad left at the lane centre: the front-left corner lies a_f sin Δψ + w/2 cos Δψ
+    # left of the centre, the rear-right one a_r sin Δψ + w/2 cos Δψ right of it (a_f, a_r: the
+    # reference point (CoG) to the body's front and rear; the truck's CoG is ahead of its middle).
+    dpsi = 0.3
+    shift = 0.5 * (TRUCK.cog_to_front_axle_m - TRUCK.cog_to_rear_axle_m)
+    a_front, a_rear = 0.5 * TRUCK.length_m + shift, 0.5 * TRUCK.length_m - shift
+    edge = 0.45 + 0.5 * TRUCK.width_m
+    left = a_front * np.sin(dpsi) + 0.5 * TRUCK.width_m * np.cos(dpsi) - edge
+    right = a_rear * np.sin(dpsi) + 0.5 * TRUCK.width_m * np.cos(dpsi) - edge
+    assert 0.0 < left < right  # the reference point alone (d = 0) would pass
+    got = planned_footprint_violation_m(_states([0.0], dpsi), 0.0, (-0.45, 0.45), TRUCK)
+    assert got == pytest.approx(right, rel=1e-12)
+    # Shifted left by the difference, both corners leave by the same amount.
+    shifted = _states([0.5 * (right - left)], dpsi)
+    got = planned_footprint_violation_m(shifted, 0.0, (-0.45, 0.45), TRUCK)
+    assert got == pytest.approx(0.5 * (left + right), rel=1e-12)
+
+
+def test_footprint_violation_counts_the_bulge_outside_a_curve() -> None:
+    # On a left curve (κ > 0) the aligned body's ends lie κ a² / 2 right of the chord: at the
+    # reference bound on the right, the rear corner (the longer arm) leaves by κ a_r² / 2.
+    kappa = 1.0 / 28.0
+    a_rear = 0.5 * CAR.length_m - 0.5 * (CAR.cog_to_front_axle_m - CAR.cog_to_rear_axle_m)
+    a_front = CAR.length_m - a_rear
+    x = _states([-0.45])
+    got = planned_footprint_violation_m(x, kappa, (-0.45, 0.45), CAR)
+    assert got == pytest.approx(0.5 * kappa * max(a_front, a_rear) ** 2, rel=1e-12)
+    # Inside the curve the same body at the left bound stays in.
+    assert planned_footprint_violation_m(_states([0.45]), kappa, (-0.45, 0.45), CAR) == 0.0
 
 
 @pytest.fixture(scope="module")

@@ -39,7 +39,7 @@ from mufusion.sim.supervision import (
     LaneRecoverySettings,
     Prober,
     ProbingSettings,
-    lane_violation_m,
+    planned_footprint_violation_m,
     relaxed_estimate,
 )
 from mufusion.sim.world import World
@@ -277,7 +277,7 @@ class ClosedLoop:
     ) -> tuple[Plan, FrictionEstimate]:
         """Re-plan with μ̂ relaxed towards the posterior mean if the plan cannot keep the lane."""
         tolerance = self.lane_recovery.violation_tolerance_m
-        before = lane_violation_m(plan.states[1:, State.d], self.lane_bounds_m)
+        before = self._footprint_violation_m(plan)
         # No friction-limited plan at all (the solve failed) counts as not keeping the lane.
         if (before <= tolerance and not plan.fallback) or relaxed_estimate(estimate, 1.0) is None:
             return plan, estimate
@@ -286,7 +286,7 @@ class ClosedLoop:
             relaxed = relaxed_estimate(estimate, alpha)
             assert relaxed is not None
             candidate = self._plan(xf, t, s_ego, relaxed, obstacles, mode)
-            violation = lane_violation_m(candidate.states[1:, State.d], self.lane_bounds_m)
+            violation = self._footprint_violation_m(candidate)
             if not candidate.fallback and violation < best[0]:
                 best = (violation, candidate, relaxed, alpha)
             if not candidate.fallback and violation <= tolerance:
@@ -303,6 +303,12 @@ class ClosedLoop:
             "μ̂ towards the posterior mean did not help",
         )
         return plan, estimate
+
+    def _footprint_violation_m(self, plan: Plan) -> float:
+        states = plan.states[1:]
+        return planned_footprint_violation_m(
+            states, self.world.curvature(states[:, State.s]), self.lane_bounds_m, self.params
+        )
 
     def _consider_probe(
         self,

@@ -15,11 +15,14 @@ estimator's threshold; it stops as soon as the local estimate is available. The 
 probe's cost; it also helps, as the vehicle arrives slower.
 
 **Lane recovery** (:func:`relaxed_estimate`). When the friction-limited plan cannot keep the
-vehicle within its lane bounds (the plan's own prediction leaves them by more than
-``violation_tolerance_m``), the planner plans again with μ̂ relaxed towards the posterior mean,
-``μ̂ + α (mean − μ̂)`` for the smallest ``α`` of ``steps`` that keeps the lane (the last one if
-none does): the guarantee of the lower bound is given up only as far as needed to stay on the
-road, and only with a posterior (F, F-safe).
+vehicle within its lane (the plan's own predicted footprint, :func:`planned_footprint_violation_m`,
+leaves the band the planner keeps the body in by more than ``violation_tolerance_m``), the
+planner plans again with μ̂ relaxed towards the posterior mean, ``μ̂ + α (mean − μ̂)`` for the
+smallest ``α`` of ``steps`` that keeps the lane (the least violating if none does): the guarantee
+of the lower bound is given up only as far as needed to stay on the road, and only with a
+posterior (F, F-safe). The footprint's corners are checked, not the reference point alone: on a
+curve and yawed against the lane the corners reach up to the body's swing and bulge further out,
+and a plan whose reference point stays within its bounds can still carry the body over the edge.
 """
 
 from __future__ import annotations
@@ -31,7 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.configurations import FrictionEstimate
-from mufusion.vehicle.params import GRAVITY_MPS2
+from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
+from mufusion.vehicle.planner_model import State
 
 
 @dataclass(frozen=True)
@@ -86,11 +90,53 @@ class LaneRecoverySettings:
             )
 
 
-def lane_violation_m(d_m: np.ndarray, lane_bounds_m: tuple[float, float]) -> float:
-    """How far a planned path's reference point leaves the lane bounds [m] (0 inside)."""
-    d = np.asarray(d_m, dtype=float)
+def planned_footprint_violation_m(
+    states: np.ndarray,
+    curvature_1pm: np.ndarray,
+    lane_bounds_m: tuple[float, float],
+    params: VehicleParams,
+) -> float:
+    """How far a plan's predicted footprint leaves its lane [m] (0 inside).
+
+    ``lane_bounds_m`` bound the reference point (the band's edges shrunk by half the vehicle
+    width), so the footprint may reach ``lane_bounds_m[0] − w/2`` and ``lane_bounds_m[1] + w/2``.
+    A body point ``x`` ahead of the reference point and ``y`` left of it lies
+    ``d + x sin Δψ + y cos Δψ − κ x² / 2`` from the lane centre (to second order in ``x κ``; the
+    last term is the chord of a curve of curvature ``κ``): the four corners of each planned
+    state are checked, not the reference point alone, which on a curve and yawed against the
+    lane is up to the body's swing and bulge inside the corners.
+
+    Parameters
+    ----------
+    states
+        Planned states ``(K, 6)`` (:class:`~mufusion.vehicle.planner_model.State`).
+    curvature_1pm
+        Road curvature at the states' ``s`` [1/m], ``(K,)`` or a scalar.
+    lane_bounds_m
+        ``(d_min, d_max)`` of the reference point [m].
+    params
+        Vehicle dimensions (width, length, axle positions).
+
+    Examples
+    --------
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> x = np.zeros((2, 6)); x[:, State.d] = [0.0, 0.5]
+    >>> round(planned_footprint_violation_m(x, 0.0, (-0.45, 0.45), TRUCK), 6)
+    0.05
+    """
+    x = np.asarray(states, dtype=float)
+    d, dpsi = x[:, State.d], x[:, State.dpsi]
+    kappa = np.broadcast_to(np.asarray(curvature_1pm, dtype=float), d.shape)
+    half_w, half_len = 0.5 * params.width_m, 0.5 * params.length_m
+    # The body's centre lies half the axle offset ahead of the reference point (CoG).
+    shift = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
+    sin_dpsi, cos_dpsi = np.sin(dpsi), np.cos(dpsi)
+    ends = [d + a * sin_dpsi - 0.5 * kappa * a * a for a in (half_len + shift, shift - half_len)]
+    lowest = np.minimum(ends[0], ends[1]) - half_w * cos_dpsi
+    highest = np.maximum(ends[0], ends[1]) + half_w * cos_dpsi
     lo, hi = lane_bounds_m
-    return float(max(0.0, np.max(lo - d, initial=0.0), np.max(d - hi, initial=0.0)))
+    return float(max(0.0, np.max(lo - half_w - lowest, initial=0.0),
+                     np.max(highest - hi - half_w, initial=0.0)))
 
 
 def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
