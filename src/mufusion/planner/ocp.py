@@ -303,8 +303,7 @@ def lateral_corridor(
         bulge = 0.5 * np.abs(kappa) * half_len**2
         hi = np.where(kappa < 0.0, hi - bulge, hi)
         lo = np.where(kappa > 0.0, lo + bulge, lo)
-    shift = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
-    a_front, a_rear = half_len + shift, half_len - shift
+    a_front, a_rear = params.cog_to_body_front_m, params.cog_to_body_rear_m
     # Only lane-keeping headings count in full: in an evasive manoeuvre the heading reaches
     # 0.3-0.5 rad and the full swing (> 1 m each side) would close the corridor the manoeuvre
     # needs; the obstacle margin covers the corners there.

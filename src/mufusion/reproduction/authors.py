@@ -84,9 +84,7 @@ TURN_SETTINGS: tuple[Setting, ...] = (
 
 # Distance from the truck's footprint front to its centre of gravity [m]: the pop-up scenario
 # measures the obstacle from the front (PopupScenario.build_road), the authors from the CoG.
-TRUCK_FRONT_AHEAD_OF_COG_M = 0.5 * (
-    TRUCK.cog_to_front_axle_m - TRUCK.cog_to_rear_axle_m
-) + 0.5 * TRUCK.length_m
+TRUCK_FRONT_AHEAD_OF_COG_M = TRUCK.cog_to_body_front_m
 _AUTHORS_OBSTACLE_FROM_COG_M = 20.0  # single_popup_1.yaml: s_ego 160 → s_obs 180
 # Their corridor keeps the ego centre 0.5 R_obs + 0.5 width + 1.0 m = 2.55 m from the obstacle
 # centre (R_obs = 0.5 m, width 2.6 m); ours keeps half the obstacle width + half the vehicle width

@@ -283,9 +283,7 @@ class PopupScenario(_Scenario):
     def build_road(self, params: VehicleParams) -> Road:
         """A straight two-lane road, the obstacle ``distance_m`` ahead of the vehicle's front."""
         s0, ob = self.start_s_m, self.obstacle
-        # The footprint is centred between the axles; its front lies this far ahead of the CoG.
-        front_m = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
-        front_m += 0.5 * params.length_m
+        front_m = params.cog_to_body_front_m
         obstacle = Obstacle(
             s_m=s0 + front_m + ob.distance_m,
             d_m=ob.lateral_offset_m,

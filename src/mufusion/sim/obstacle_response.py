@@ -90,8 +90,7 @@ def obstacle_mode(
     if not response.brake_first:
         return "evade"
     s_ego, d_ego, speed = float(xf[State.s]), float(xf[State.d]), float(xf[State.vx])
-    half_len = 0.5 * params.length_m
-    front = half_len + 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
+    front = params.cog_to_body_front_m
     for ob in obstacles:
         clear = 0.5 * (ob.width_m + params.width_m) + response.margin_m
         ahead = ob.s_m - s_ego

@@ -127,11 +127,10 @@ def planned_footprint_violation_m(
     x = np.asarray(states, dtype=float)
     d, dpsi = x[:, State.d], x[:, State.dpsi]
     kappa = np.broadcast_to(np.asarray(curvature_1pm, dtype=float), d.shape)
-    half_w, half_len = 0.5 * params.width_m, 0.5 * params.length_m
-    # The body's centre lies half the axle offset ahead of the reference point (CoG).
-    shift = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
+    half_w = 0.5 * params.width_m
     sin_dpsi, cos_dpsi = np.sin(dpsi), np.cos(dpsi)
-    ends = [d + a * sin_dpsi - 0.5 * kappa * a * a for a in (half_len + shift, shift - half_len)]
+    ends = [d + a * sin_dpsi - 0.5 * kappa * a * a
+            for a in (params.cog_to_body_front_m, -params.cog_to_body_rear_m)]
     lowest = np.minimum(ends[0], ends[1]) - half_w * cos_dpsi
     highest = np.maximum(ends[0], ends[1]) + half_w * cos_dpsi
     lo, hi = lane_bounds_m

@@ -213,7 +213,7 @@ class World:
         lane quantities come from the Frenet offsets of its four corners.
         """
         x, y, psi = pose
-        shift = 0.5 * (params.cog_to_front_axle_m - params.cog_to_rear_axle_m)
+        shift = params.body_centre_ahead_of_cog_m
         cx, cy = x + shift * math.cos(psi), y + shift * math.sin(psi)
         length, width, lane_width = params.length_m, params.width_m, self.road.lane_width_m
         corners = rectangle_corner_points(cx, cy, psi, length, width)

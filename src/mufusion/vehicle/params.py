@@ -105,6 +105,23 @@ class VehicleParams:
         return self.cog_to_front_axle_m + self.cog_to_rear_axle_m
 
     @property
+    def body_centre_ahead_of_cog_m(self) -> float:
+        """How far the body's centre lies ahead of the CoG [m] (negative: behind it).
+
+        The footprint is the ``length × width`` rectangle centred midway between the axles."""
+        return 0.5 * (self.cog_to_front_axle_m - self.cog_to_rear_axle_m)
+
+    @property
+    def cog_to_body_front_m(self) -> float:
+        """Distance from the CoG to the footprint's front edge [m]."""
+        return 0.5 * self.length_m + self.body_centre_ahead_of_cog_m
+
+    @property
+    def cog_to_body_rear_m(self) -> float:
+        """Distance from the CoG to the footprint's rear edge [m]."""
+        return 0.5 * self.length_m - self.body_centre_ahead_of_cog_m
+
+    @property
     def static_front_load_n(self) -> float:
         """Static normal force on the front axle [N]."""
         return self.mass_kg * GRAVITY_MPS2 * self.cog_to_rear_axle_m / self.wheelbase_m
