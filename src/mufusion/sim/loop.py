@@ -276,10 +276,14 @@ class ClosedLoop:
         mode: PlanningMode,
     ) -> tuple[Plan, FrictionEstimate]:
         """Re-plan with μ̂ relaxed towards the posterior mean if the plan cannot keep the lane."""
+        # Without a posterior (GT, L, P) there is nothing to relax: skip the footprint check,
+        # which would run at every planning step.
+        if relaxed_estimate(estimate, 1.0) is None:
+            return plan, estimate
         tolerance = self.lane_recovery.violation_tolerance_m
         before = self._footprint_violation_m(plan)
         # No friction-limited plan at all (the solve failed) counts as not keeping the lane.
-        if (before <= tolerance and not plan.fallback) or relaxed_estimate(estimate, 1.0) is None:
+        if before <= tolerance and not plan.fallback:
             return plan, estimate
         best = (np.inf if plan.fallback else before, plan, estimate, 0.0)
         for alpha in self.lane_recovery.steps:
