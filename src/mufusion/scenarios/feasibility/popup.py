@@ -3,11 +3,12 @@
 The obstacle appears ``D`` ahead of the vehicle's front (measured to the obstacle's centre, as
 the scenario places it), so the front reaches its near face after ``D − l_obs/2``. *Braking*:
 ``v²/(2a) + v·t_brake ≤ D − l_obs/2`` with ``a = min(λ μ g, brake limit)``. *Evasion* at constant
-speed: the lateral acceleration ``a_y = λ μ g`` builds up as the steering turns at its rate
-limit to the angle that acceleration needs (kinematic ``L a_y / v²`` plus the front slip angle
-``k a_y / g``), after the servo's lag; the lateral shift when the front reaches the obstacle must
-clear it by the margin. The variant is feasible if either envelope is. Derivation:
-``docs/feasibility.md``.
+speed: the lateral acceleration ``a_y`` (at most ``λ μ g``) changes no faster than the steering
+turns at its rate limit (the angle per acceleration is the kinematic ``L / v²`` plus the front
+slip ``k / g``), after the servo's lag, and the manoeuvre must stop its lateral motion before
+the footprint leaves the road (a lane change, not a swerve off the road); the lateral shift when
+the front reaches the obstacle must clear it by the margin. The variant is feasible if either
+envelope is. Derivation: ``docs/feasibility.md``.
 """
 
 from __future__ import annotations
@@ -81,28 +82,51 @@ class _Steering:
     dead_time_s: float
 
 
-def _shift_m(speed_mps: float, time_s: float, a_max: float, st: _Steering) -> tuple[float, ...]:
-    """Lateral shift [m] after ``time_s`` at ``speed_mps``, the ramp time and the acceleration."""
+def _shift_m(
+    speed_mps: float, time_s: float, a_max: float, room_m: float, st: _Steering
+) -> tuple[float, float, float]:
+    """Lateral shift [m] after ``time_s``, the ramp time [s] and the plateau [m/s²].
+
+    The lateral acceleration follows the fastest lane change that comes to rest laterally at
+    ``room_m``: after the servo's lag it ramps at the steering's rate to the plateau ``a``, holds
+    it for ``h``, ramps to ``−a`` (counter-steer), holds for ``h`` and ramps back to zero. Its peak
+    shift is ``a (2 t_r + h)(t_r + h)`` with ``t_r = a / j``; ``h`` makes it equal ``room_m``. The
+    plateau is the friction's (or the steering angle's) limit, lowered to ``(room j² / 2)^(1/3)``
+    when even ``h = 0`` would overshoot the room. The shift at any time rises with the plateau
+    and with ``h``, so more friction never shrinks it.
+    """
     steer_per_accel = st.wheelbase_m / speed_mps**2 + st.slip_rad_per_g / GRAVITY_MPS2
-    a = min(a_max, st.max_rad / steer_per_accel)
-    ramp = a * steer_per_accel / st.rate_radps
+    jerk = st.rate_radps / steer_per_accel
+    a = min(a_max, st.max_rad / steer_per_accel, (0.5 * room_m * jerk * jerk) ** (1.0 / 3.0))
+    ramp = a / jerk
     t = time_s - st.dead_time_s
-    if t <= 0.0:
+    if t <= 0.0 or a <= 0.0:
         return 0.0, ramp, a
-    if ramp >= t:  # still ramping: a(τ) = a τ / ramp
-        return a * t**3 / (6.0 * ramp), ramp, a
-    return a * (0.5 * t * t - 0.5 * ramp * t + ramp * ramp / 6.0), ramp, a
+    hold = max(0.5 * (math.sqrt(ramp * ramp + 4.0 * room_m / a) - 3.0 * ramp), 0.0)
+    y = v = acc = 0.0
+    for duration, j in ((ramp, jerk), (hold, 0.0), (2.0 * ramp, -jerk), (hold, 0.0),
+                        (ramp, jerk)):
+        d = min(duration, t)
+        y += v * d + acc * d * d / 2.0 + j * d**3 / 6.0
+        v += acc * d + j * d * d / 2.0
+        acc += j * d
+        t -= d
+        if t <= 0.0:
+            break
+    return y, ramp, a
 
 
-def _max_speed(shift_needed_m: float, path_m: float, a_max: float, st: _Steering) -> float:
+def _max_speed(
+    shift_needed_m: float, path_m: float, a_max: float, room_m: float, st: _Steering
+) -> float:
     """Highest speed at which the shift is reached in time (the shift falls with speed)."""
     lo, hi = 0.01, 1000.0
-    if _shift_m(hi, path_m / hi, a_max, st)[0] >= shift_needed_m:
+    if _shift_m(hi, path_m / hi, a_max, room_m, st)[0] >= shift_needed_m:
         return hi
     for _ in range(80):  # bisection in log space
         mid = math.sqrt(lo * hi)
-        lo, hi = (mid, hi) if _shift_m(mid, path_m / mid, a_max, st)[0] >= shift_needed_m else (
-            lo, mid)
+        reached = _shift_m(mid, path_m / mid, a_max, room_m, st)[0] >= shift_needed_m
+        lo, hi = (mid, hi) if reached else (lo, mid)
     return lo
 
 
@@ -175,7 +199,7 @@ def popup_feasibility(
     ...     utilization_factor=0.9, brake_dead_time_s=0.15, steer_dead_time_s=0.05,
     ...     steer_rate_radps=0.9, max_steer_rad=0.6, wheelbase_m=3.4, slip_rad_per_g=0.2365)
     >>> r.braking.feasibility_class.value, r.evasion.side, r.evasion.feasibility_class.value
-    ('infeasible', 'left', 'feasible')
+    ('infeasible', 'left', 'marginal')
     """
     for name, value in (
         ("speed_mps", speed_mps), ("mu", mu), ("obstacle_distance_m", obstacle_distance_m),
@@ -212,19 +236,18 @@ def popup_feasibility(
     needs = {"left": obstacle_offset_m + reach, "right": reach - obstacle_offset_m}
     rooms = {"left": room_left_m, "right": room_right_m}
     time_s = path / speed_mps
-    shift, ramp, a = _shift_m(speed_mps, time_s, a_max, steering)
 
     def envelope(side: Literal["left", "right"]) -> EvasionEnvelope:
-        need = needs[side]
+        need, room = needs[side], rooms[side]
+        shift, ramp, a = _shift_m(speed_mps, time_s, a_max, room, steering)
         label: Literal["left", "right", "none"] = side
         if need <= 0.0:  # the obstacle does not reach into the vehicle's path
             v_max, label = math.inf, "none"
         else:
-            v_max = _max_speed(need, path, a_max, steering) if need <= rooms[side] else 0.0
-            label = side
+            v_max = _max_speed(need, path, a_max, room, steering) if need <= room else 0.0
         return EvasionEnvelope(
             side=label, required_shift_m=max(need, 0.0), achievable_shift_m=shift,
-            spare_shift_m=shift - max(need, 0.0) if need <= rooms[side] else -math.inf,
+            spare_shift_m=shift - max(need, 0.0) if need <= room else -math.inf,
             time_to_obstacle_s=time_s, steer_ramp_s=ramp, lateral_accel_mps2=a,
             max_speed_mps=v_max, margin_mps=v_max - speed_mps,
             feasibility_class=classify_speed_margin(v_max - speed_mps, speed_mps),
