@@ -72,14 +72,24 @@ def _ops(*values: Any):
     if _is_symbolic(*values):
         import casadi as ca
 
-        return ca.sin, ca.cos, ca.fmax, lambda parts: ca.vertcat(*parts)
+        return ca.sin, ca.cos, ca.fmax, _stack_casadi
     return np.sin, np.cos, np.maximum, _stack_numpy
 
 
-def _stack_numpy(parts: list[Any]) -> np.ndarray:
-    """``np.stack(np.broadcast_arrays(*parts))``, without the intermediate views (the sampling
-    roll-outs call the dynamics a few hundred times per planning step)."""
-    out = np.empty((len(parts), *np.broadcast(*parts).shape), dtype=np.result_type(*parts))
+def _stack_casadi(parts: list[Any], out: None = None) -> Any:
+    if out is not None:
+        raise ValueError("out must be None for CasADi arguments (symbols cannot be buffered)")
+    import casadi as ca
+
+    return ca.vertcat(*parts)
+
+
+def _stack_numpy(parts: list[Any], out: np.ndarray | None = None) -> np.ndarray:
+    """``np.stack(np.broadcast_arrays(*parts))``, without the intermediate views, into ``out``
+    when given (the sampling roll-outs call the dynamics a few hundred times per planning step).
+    """
+    if out is None:
+        out = np.empty((len(parts), *np.broadcast(*parts).shape), dtype=np.result_type(*parts))
     for i, part in enumerate(parts):
         out[i] = part
     return out
@@ -267,6 +277,7 @@ def frenet_bicycle_dynamics(
     curvature_1pm: Any,
     rear_stiffness_n_per_rad: Any,
     params: VehicleParams,
+    out: np.ndarray | None = None,
 ) -> Any:
     """Time derivative of the planner state.
 
@@ -282,11 +293,14 @@ def frenet_bicycle_dynamics(
         Rear axle cornering stiffness [N/rad] (see :func:`rear_cornering_stiffness_n_per_rad`).
     params
         Vehicle parameters.
+    out
+        Numpy only: array of the result's shape to write ``x_dot`` into (no allocation; the
+        values are those of the call without it).
 
     Returns
     -------
     x_dot
-        Same shape as ``x``: ``ṡ = (v_x cosΔψ − v_y sinΔψ)/(1 − dκ)``,
+        Same shape as ``x`` (``out`` when given): ``ṡ = (v_x cosΔψ − v_y sinΔψ)/(1 − dκ)``,
         ``ḋ = v_x sinΔψ + v_y cosΔψ``,
         ``Δψ̇ = ψ̇ − κṡ``, ``ψ̈ = (l_f F_yf − l_r F_yr)/I_z``, ``v̇_x = (F_xf + F_xr)/m + v_y ψ̇``,
         ``v̇_y = (F_yf + F_yr)/m − v_x ψ̇``.
@@ -306,12 +320,13 @@ def frenet_bicycle_dynamics(
     fyr = rear_lateral_force_n(x, rear_stiffness_n_per_rad, params)
     m = params.mass_kg
 
-    s_dot = (vx * cos(dpsi) - vy * sin(dpsi)) / (1.0 - d * curvature_1pm)
-    d_dot = vx * sin(dpsi) + vy * cos(dpsi)
+    sin_dpsi, cos_dpsi = sin(dpsi), cos(dpsi)
+    s_dot = (vx * cos_dpsi - vy * sin_dpsi) / (1.0 - d * curvature_1pm)
+    d_dot = vx * sin_dpsi + vy * cos_dpsi
     dpsi_dot = psidot - curvature_1pm * s_dot
     psi_ddot = (
         params.cog_to_front_axle_m * fyf - params.cog_to_rear_axle_m * fyr
     ) / params.yaw_inertia_kgm2
     vx_dot = (fxf + fxr) / m + vy * psidot
     vy_dot = (fyf + fyr) / m - vx * psidot
-    return stack([s_dot, d_dot, dpsi_dot, psi_ddot, vx_dot, vy_dot])
+    return stack([s_dot, d_dot, dpsi_dot, psi_ddot, vx_dot, vy_dot], out)
