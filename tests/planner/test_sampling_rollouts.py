@@ -115,6 +115,7 @@ def _random_case(seed: int):
 TABLES = [None, AUTHORS_TIRES, AUTHORS_TIRES_INTERPOLATED]
 
 
+@pytest.mark.filterwarnings("error")  # not even an ignored warning in the hot loop
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("table", TABLES, ids=["fixed-tire", "table-step", "table-linear"])
 def test_rollouts_are_bitwise_the_straightforward_evaluation(seed: int, table) -> None:

@@ -135,16 +135,17 @@ def rk4_step(
     w = workspace
     k1, k2, k3, k4, stage = (None,) * 5 if w is None else (w.k1, w.k2, w.k3, w.k4, w.stage)
     f, args = frenet_bicycle_dynamics, (u, curvature_1pm, rear_stiffness, params)
-    # Without buffers, np.add/np.multiply with out=None allocate as the operators would.
+    # The step sizes as 0-d arrays (numpy multiplies by these faster than by Python floats;
+    # same values); out given positionally (None: allocate, as the operators would).
+    half, full, sixth = np.array(0.5 * dt_s), np.array(dt_s), np.array(dt_s / 6.0)
+    add, mul = np.add, np.multiply
     k1 = f(x, *args, k1)
-    k2 = f(np.add(x, np.multiply(0.5 * dt_s, k1, out=stage), out=stage), *args, k2)
-    k3 = f(np.add(x, np.multiply(0.5 * dt_s, k2, out=stage), out=stage), *args, k3)
-    k4 = f(np.add(x, np.multiply(dt_s, k3, out=stage), out=stage), *args, k4)
+    k2 = f(add(x, mul(half, k1, stage), stage), *args, k2)
+    k3 = f(add(x, mul(half, k2, stage), stage), *args, k3)
+    k4 = f(add(x, mul(full, k3, stage), stage), *args, k4)
     # k1..k4 are this call's own arrays: summed in place, left to right.
-    total = np.add(k1, np.multiply(2, k2, out=k2), out=k1)
-    total = np.add(total, np.multiply(2, k3, out=k3), out=total)
-    total = np.add(total, k4, out=total)
-    return np.add(x, np.multiply(dt_s / 6.0, total, out=total), out=out)
+    total = add(add(add(k1, mul(2, k2, k2), k1), mul(2, k3, k3), k1), k4, k1)
+    return add(x, mul(sixth, total, total), out)
 
 
 def _per_candidate(value: np.ndarray | float, m_count: int) -> np.ndarray:
@@ -187,12 +188,14 @@ def candidate_rollouts(
     lower, upper = longitudinal_force_bounds_n(params)
     m = params.mass_kg
     share_front = params.cog_to_rear_axle_m / params.wheelbase_m
+    speed_force_n_per_mps = m * config.speed_gain_1_per_s
     ax = np.zeros(m_count)
     for k in range(horizon_steps):
         x, u = xs[k], us[k]
-        v = np.maximum(x[State.vx], 1.0)
-        kappa = _per_candidate(curvature_of_s(x[State.s]), m_count)
-        mu = _per_candidate(mu_hat_of_s(x[State.s]), m_count)
+        s, vx = x[State.s], x[State.vx]
+        v = np.maximum(vx, 1.0)
+        kappa = _per_candidate(curvature_of_s(s), m_count)
+        mu = _per_candidate(mu_hat_of_s(s), m_count)
         fzf, fzr = normal_loads_n(ax, params)
         # A diverged candidate (discarded by the caller) may sit where μ̂ is not finite.
         mu_stiffness = np.where(np.isfinite(mu) & (mu > 0.0), mu, 1.0)
@@ -200,12 +203,13 @@ def candidate_rollouts(
             params, fzr, utilization_factor, mu_hat=mu_stiffness, table=stiffness_table
         )
         fyf = steering_force_n(x, d_t, kappa, v, params, config)
-        f_long = m * config.speed_gain_1_per_s * (v_t - x[State.vx])
-        fxf = np.where(f_long < 0.0, share_front * f_long, 0.0)
-        fxr = np.where(f_long < 0.0, (1.0 - share_front) * f_long, f_long)
+        f_long = speed_force_n_per_mps * (v_t - vx)
+        braking = f_long < 0.0
+        fxf = np.where(braking, share_front * f_long, 0.0)
+        fxr = np.where(braking, (1.0 - share_front) * f_long, f_long)
         # Saturate at the friction limits (longitudinal first, lateral gets what remains).
-        limit_f = utilization_factor * mu * fzf
-        limit_r = utilization_factor * mu * fzr
+        limit_mu = utilization_factor * mu
+        limit_f, limit_r = limit_mu * fzf, limit_mu * fzr
         # np.minimum(np.maximum(...)) is np.clip's definition, at a fraction of its overhead.
         fxf = np.minimum(
             np.maximum(fxf, np.maximum(lower[0], -0.8 * limit_f)), upper[0], out=u[Input.fxf]

@@ -54,6 +54,13 @@ class Input(IntEnum):
 N_STATES = len(State)
 N_INPUTS = len(Input)
 
+# The rows as plain ints for the model's own indexing: on Python 3.11 looking up an IntEnum member
+# costs as much as the numpy indexing itself, and the sampling roll-outs evaluate the model some
+# two hundred times per planning step.
+_D, _DPSI, _PSIDOT = int(State.d), int(State.dpsi), int(State.psidot)
+_VX, _VY = int(State.vx), int(State.vy)
+_FYF, _FXF, _FXR = int(Input.fyf), int(Input.fxf), int(Input.fxr)
+
 
 # Argument types that are never CasADi symbols (checked first: the roll-outs call often).
 _NUMERIC_TYPES = frozenset({np.ndarray, float, int, np.float64})
@@ -252,10 +259,16 @@ def rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleP
     ``F_yr = C_r (l_r ψ̇ − v_y) / max(v_x, 1 m/s)``; works on numpy arrays (``x`` of shape
     ``(6, ...)``) and CasADi symbols.
     """
-    _, _, fmax, _ = _ops(x, rear_stiffness_n_per_rad)
-    vx = fmax(x[State.vx], MIN_SPEED_FOR_SLIP_MPS)
+    return _rear_lateral_force_n(
+        x, rear_stiffness_n_per_rad, params, _ops(x, rear_stiffness_n_per_rad)[2]
+    )
+
+
+def _rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleParams,
+                          fmax: Any) -> Any:
+    vx = fmax(x[_VX], MIN_SPEED_FOR_SLIP_MPS)
     return rear_stiffness_n_per_rad * (
-        params.cog_to_rear_axle_m * x[State.psidot] - x[State.vy]
+        params.cog_to_rear_axle_m * x[_PSIDOT] - x[_VY]
     ) / vx
 
 
@@ -313,11 +326,11 @@ def frenet_bicycle_dynamics(
     >>> float(xd[State.s])
     10.0
     """
-    sin, cos, _, stack = _ops(x, u, curvature_1pm)
-    d, dpsi, psidot = x[State.d], x[State.dpsi], x[State.psidot]
-    vx, vy = x[State.vx], x[State.vy]
-    fyf, fxf, fxr = u[Input.fyf], u[Input.fxf], u[Input.fxr]
-    fyr = rear_lateral_force_n(x, rear_stiffness_n_per_rad, params)
+    sin, cos, fmax, stack = _ops(x, u, curvature_1pm, rear_stiffness_n_per_rad)
+    d, dpsi, psidot = x[_D], x[_DPSI], x[_PSIDOT]
+    vx, vy = x[_VX], x[_VY]
+    fyf, fxf, fxr = u[_FYF], u[_FXF], u[_FXR]
+    fyr = _rear_lateral_force_n(x, rear_stiffness_n_per_rad, params, fmax)
     m = params.mass_kg
 
     sin_dpsi, cos_dpsi = sin(dpsi), cos(dpsi)
