@@ -318,6 +318,11 @@ def frenet_bicycle_dynamics(
         ``Δψ̇ = ψ̇ − κṡ``, ``ψ̈ = (l_f F_yf − l_r F_yr)/I_z``, ``v̇_x = (F_xf + F_xr)/m + v_y ψ̇``,
         ``v̇_y = (F_yf + F_yr)/m − v_x ψ̇``.
 
+    Raises
+    ------
+    ValueError
+        If ``out`` is given with CasADi arguments.
+
     Examples
     --------
     >>> from mufusion.vehicle.params import TRUCK
