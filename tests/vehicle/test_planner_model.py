@@ -46,6 +46,12 @@ def test_numpy_and_casadi_agree(s, d, dpsi, psidot, vx, vy, forces, kappa) -> No
     np.testing.assert_allclose(numeric, symbolic, rtol=1e-12, atol=1e-9)
 
 
+def test_an_output_buffer_is_refused_for_symbols() -> None:
+    xs, us, ks = ca.SX.sym("x", N_STATES), ca.SX.sym("u", N_INPUTS), ca.SX.sym("k")
+    with pytest.raises(ValueError, match="out"):
+        frenet_bicycle_dynamics(xs, us, ks, 1e5, TRUCK, out=np.empty(N_STATES))
+
+
 def test_vectorised_over_trailing_axes_equals_column_by_column() -> None:
     rng = np.random.default_rng(3)
     x = rng.normal(size=(N_STATES, 7, 5))

@@ -54,6 +54,13 @@ class Input(IntEnum):
 N_STATES = len(State)
 N_INPUTS = len(Input)
 
+# The rows as plain ints for the model's own indexing: on Python 3.11 looking up an IntEnum member
+# costs as much as the numpy indexing itself, and the sampling roll-outs evaluate the model some
+# two hundred times per planning step.
+_D, _DPSI, _PSIDOT = int(State.d), int(State.dpsi), int(State.psidot)
+_VX, _VY = int(State.vx), int(State.vy)
+_FYF, _FXF, _FXR = int(Input.fyf), int(Input.fxf), int(Input.fxr)
+
 
 # Argument types that are never CasADi symbols (checked first: the roll-outs call often).
 _NUMERIC_TYPES = frozenset({np.ndarray, float, int, np.float64})
@@ -72,14 +79,24 @@ def _ops(*values: Any):
     if _is_symbolic(*values):
         import casadi as ca
 
-        return ca.sin, ca.cos, ca.fmax, lambda parts: ca.vertcat(*parts)
+        return ca.sin, ca.cos, ca.fmax, _stack_casadi
     return np.sin, np.cos, np.maximum, _stack_numpy
 
 
-def _stack_numpy(parts: list[Any]) -> np.ndarray:
-    """``np.stack(np.broadcast_arrays(*parts))``, without the intermediate views (the sampling
-    roll-outs call the dynamics a few hundred times per planning step)."""
-    out = np.empty((len(parts), *np.broadcast(*parts).shape), dtype=np.result_type(*parts))
+def _stack_casadi(parts: list[Any], out: None = None) -> Any:
+    if out is not None:
+        raise ValueError("out must be None for CasADi arguments (symbols cannot be buffered)")
+    import casadi as ca
+
+    return ca.vertcat(*parts)
+
+
+def _stack_numpy(parts: list[Any], out: np.ndarray | None = None) -> np.ndarray:
+    """``np.stack(np.broadcast_arrays(*parts))``, without the intermediate views, into ``out``
+    when given (the sampling roll-outs call the dynamics a few hundred times per planning step).
+    """
+    if out is None:
+        out = np.empty((len(parts), *np.broadcast(*parts).shape), dtype=np.result_type(*parts))
     for i, part in enumerate(parts):
         out[i] = part
     return out
@@ -242,10 +259,16 @@ def rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleP
     ``F_yr = C_r (l_r ψ̇ − v_y) / max(v_x, 1 m/s)``; works on numpy arrays (``x`` of shape
     ``(6, ...)``) and CasADi symbols.
     """
-    _, _, fmax, _ = _ops(x, rear_stiffness_n_per_rad)
-    vx = fmax(x[State.vx], MIN_SPEED_FOR_SLIP_MPS)
+    return _rear_lateral_force_n(
+        x, rear_stiffness_n_per_rad, params, _ops(x, rear_stiffness_n_per_rad)[2]
+    )
+
+
+def _rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleParams,
+                          fmax: Any) -> Any:
+    vx = fmax(x[_VX], MIN_SPEED_FOR_SLIP_MPS)
     return rear_stiffness_n_per_rad * (
-        params.cog_to_rear_axle_m * x[State.psidot] - x[State.vy]
+        params.cog_to_rear_axle_m * x[_PSIDOT] - x[_VY]
     ) / vx
 
 
@@ -267,6 +290,7 @@ def frenet_bicycle_dynamics(
     curvature_1pm: Any,
     rear_stiffness_n_per_rad: Any,
     params: VehicleParams,
+    out: np.ndarray | None = None,
 ) -> Any:
     """Time derivative of the planner state.
 
@@ -282,14 +306,22 @@ def frenet_bicycle_dynamics(
         Rear axle cornering stiffness [N/rad] (see :func:`rear_cornering_stiffness_n_per_rad`).
     params
         Vehicle parameters.
+    out
+        Numpy only: array of the result's shape to write ``x_dot`` into (no allocation; the
+        values are those of the call without it).
 
     Returns
     -------
     x_dot
-        Same shape as ``x``: ``ṡ = (v_x cosΔψ − v_y sinΔψ)/(1 − dκ)``,
+        Same shape as ``x`` (``out`` when given): ``ṡ = (v_x cosΔψ − v_y sinΔψ)/(1 − dκ)``,
         ``ḋ = v_x sinΔψ + v_y cosΔψ``,
         ``Δψ̇ = ψ̇ − κṡ``, ``ψ̈ = (l_f F_yf − l_r F_yr)/I_z``, ``v̇_x = (F_xf + F_xr)/m + v_y ψ̇``,
         ``v̇_y = (F_yf + F_yr)/m − v_x ψ̇``.
+
+    Raises
+    ------
+    ValueError
+        If ``out`` is given with CasADi arguments.
 
     Examples
     --------
@@ -299,19 +331,20 @@ def frenet_bicycle_dynamics(
     >>> float(xd[State.s])
     10.0
     """
-    sin, cos, _, stack = _ops(x, u, curvature_1pm)
-    d, dpsi, psidot = x[State.d], x[State.dpsi], x[State.psidot]
-    vx, vy = x[State.vx], x[State.vy]
-    fyf, fxf, fxr = u[Input.fyf], u[Input.fxf], u[Input.fxr]
-    fyr = rear_lateral_force_n(x, rear_stiffness_n_per_rad, params)
+    sin, cos, fmax, stack = _ops(x, u, curvature_1pm, rear_stiffness_n_per_rad)
+    d, dpsi, psidot = x[_D], x[_DPSI], x[_PSIDOT]
+    vx, vy = x[_VX], x[_VY]
+    fyf, fxf, fxr = u[_FYF], u[_FXF], u[_FXR]
+    fyr = _rear_lateral_force_n(x, rear_stiffness_n_per_rad, params, fmax)
     m = params.mass_kg
 
-    s_dot = (vx * cos(dpsi) - vy * sin(dpsi)) / (1.0 - d * curvature_1pm)
-    d_dot = vx * sin(dpsi) + vy * cos(dpsi)
+    sin_dpsi, cos_dpsi = sin(dpsi), cos(dpsi)
+    s_dot = (vx * cos_dpsi - vy * sin_dpsi) / (1.0 - d * curvature_1pm)
+    d_dot = vx * sin_dpsi + vy * cos_dpsi
     dpsi_dot = psidot - curvature_1pm * s_dot
     psi_ddot = (
         params.cog_to_front_axle_m * fyf - params.cog_to_rear_axle_m * fyr
     ) / params.yaw_inertia_kgm2
     vx_dot = (fxf + fxr) / m + vy * psidot
     vy_dot = (fyf + fyr) / m - vx * psidot
-    return stack([s_dot, d_dot, dpsi_dot, psi_ddot, vx_dot, vy_dot])
+    return stack([s_dot, d_dot, dpsi_dot, psi_ddot, vx_dot, vy_dot], out)
