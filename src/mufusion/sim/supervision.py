@@ -99,7 +99,10 @@ def planned_footprint_violation_m(
     """How far a plan's predicted footprint leaves its lane [m] (0 inside).
 
     ``lane_bounds_m`` bound the reference point (the band's edges shrunk by half the vehicle
-    width), so the footprint may reach ``lane_bounds_m[0] − w/2`` and ``lane_bounds_m[1] + w/2``.
+    width and by the planner's footprint margin, ``FOOTPRINT_MARGIN_M`` = 0.1 m for the
+    scenarios), so the footprint may reach ``lane_bounds_m[0] − w/2`` and
+    ``lane_bounds_m[1] + w/2``: that margin inside the edges, which a plan must leave for the
+    plant's tracking error.
     A body point ``x`` ahead of the reference point and ``y`` left of it lies
     ``d + x sin Δψ + y cos Δψ − κ x² / 2`` from the lane centre (to second order in ``x κ``; the
     last term is the chord of a curve of curvature ``κ``): the four corners of each planned
