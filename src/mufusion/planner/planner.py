@@ -36,6 +36,7 @@ from mufusion.planner.sampling import (
     VIOLATION_WEIGHT,
     SamplingConfig,
     candidate_rollouts,
+    rk4_step,
     tracking_cost,
     violation_m,
 )
@@ -45,7 +46,6 @@ from mufusion.vehicle.planner_model import (
     N_INPUTS,
     N_STATES,
     State,
-    frenet_bicycle_dynamics,
     rear_lateral_force_n,
 )
 
@@ -69,12 +69,7 @@ def rollout(
     """RK4 roll-out of the planner model; ``inputs (N, 3, ...)`` → states ``(N+1, 6, ...)``."""
     xs = [np.asarray(x0, dtype=float)]
     for k in range(inputs.shape[0]):
-        x, u, c, cr = xs[-1], inputs[k], curvature[k], rear_stiffness[k]
-        k1 = frenet_bicycle_dynamics(x, u, c, cr, params)
-        k2 = frenet_bicycle_dynamics(x + 0.5 * dt_s * k1, u, c, cr, params)
-        k3 = frenet_bicycle_dynamics(x + 0.5 * dt_s * k2, u, c, cr, params)
-        k4 = frenet_bicycle_dynamics(x + dt_s * k3, u, c, cr, params)
-        xs.append(x + dt_s / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4))
+        xs.append(rk4_step(xs[-1], inputs[k], curvature[k], rear_stiffness[k], params, dt_s))
     return np.stack(xs)
 
 
