@@ -118,7 +118,8 @@ def instrumented(clock: StageClock) -> Iterator[None]:
 
     def timed_init(self: AcadosBackend, *args: Any, **kwargs: Any) -> None:
         backend_init(self, *args, **kwargs)
-        self.solver = _TimedSolver(self.solver, clock)
+        for generated in self.solvers():
+            generated.solver = _TimedSolver(generated.solver, clock)
 
     try:
         AcadosBackend.__init__ = timed_init  # type: ignore[method-assign]

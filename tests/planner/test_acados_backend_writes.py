@@ -19,9 +19,14 @@ class Probe:
         self.inner, self.write_all = inner, write_all
         self.poison = False
 
+    @property
+    def last_solve_retried(self) -> bool:
+        return self.inner.last_solve_retried
+
     def solve(self, x0, guess_x, guess_u, p, *args):
         if self.write_all:
-            self.inner._written.clear()
+            for generated in self.inner.solvers():
+                generated._written.clear()
         if self.poison:
             p = np.full_like(p, np.nan)
         return self.inner.solve(x0, guess_x, guess_u, p, *args)

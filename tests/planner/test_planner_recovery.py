@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mufusion.planner.acados_backend import AcadosBackend
 from mufusion.planner.ocp import PlannerConfig, PlausibilityLimits
 from mufusion.planner.plan import FallbackReason
 from mufusion.planner.planner import TractionAdaptivePlanner
@@ -37,9 +38,11 @@ class FaultyBackend:
         self.inner, self.reset_works = inner, reset_works
         self.mode = "none"
         self.resets = 0
+        self.last_solve_retried = False  # the inner backend's, for the solves it ran
 
     def solve(self, x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi, min_speed_mps,
               max_drive_force_n=None):
+        self.last_solve_retried = False
         if self.mode == "raise":
             raise RuntimeError("injected")
         if self.mode == "status4":
@@ -48,6 +51,7 @@ class FaultyBackend:
             p = np.full_like(p, np.nan)
         status, xs, us = self.inner.solve(x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi,
                                           min_speed_mps, max_drive_force_n)
+        self.last_solve_retried = self.inner.last_solve_retried
         if self.mode == "times1000":
             us = 1000.0 * us
         if self.mode == "nan_success":
@@ -156,8 +160,8 @@ def test_nan_once_in_mu_hat_recovers_within_two_steps(faulty):
     assert all(p.mu_sanitized_stages == 0 for p in plans[4:])
 
 
-def _poisoned_run(reset_works: bool) -> list:
-    inner = TractionAdaptivePlanner(TRUCK, CONFIG).backend
+def _poisoned_run(reset_works: bool, robust_retry: bool = True) -> list:
+    inner = AcadosBackend(TRUCK, CONFIG, robust_retry=robust_retry)
     backend = FaultyBackend(inner, reset_works=reset_works)
     planner = TractionAdaptivePlanner(TRUCK, CONFIG, backend=backend)
     return _run(planner, 10, fault_at_step=lambda i: "poison" if i == 3 else "none",
@@ -175,9 +179,60 @@ def test_poisoned_solver_is_reinitialised_and_recovers_within_two_steps():
 
 def test_without_reinitialisation_the_solver_stays_poisoned():
     # The fault the reset fixes: after one NaN solve, acados' multipliers keep every later RTI
-    # step failing although the inputs are finite again.
-    plans = _poisoned_run(reset_works=False)
+    # step failing although the inputs are finite again (one solver, no retry).
+    plans = _poisoned_run(reset_works=False, robust_retry=False)
     assert not any(p.ok for p in plans[3:])
+
+
+def test_the_robust_retry_resets_the_fast_solver_it_gave_up_on():
+    # With the retry, the backend resets its fast solver itself before asking the robust one,
+    # so even a planner that never resets recovers at the next step.
+    plans = _poisoned_run(reset_works=False, robust_retry=True)
+    assert not plans[3].ok and plans[3].robust_qp_retry
+    assert all(p.ok and not p.robust_qp_retry for p in plans[4:]), [p.status for p in plans]
+
+
+class _FailingSolver:
+    """Stands in for the fast generated solver: every solve fails like a NaN in HPIPM."""
+
+    def __init__(self) -> None:
+        self.resets = 0
+
+    def solve(self, x0, guess_x, guess_u, *args):
+        return 4, guess_x.copy(), guess_u.copy()
+
+    def reset(self) -> None:
+        self.resets += 1
+
+
+def test_a_failed_fast_solve_is_repeated_by_the_robust_solver_and_logged():
+    backend = AcadosBackend(TRUCK, CONFIG)
+    reference = TractionAdaptivePlanner(TRUCK, CONFIG, backend=AcadosBackend(TRUCK, CONFIG))
+    want = _run(reference, 3)
+    failing = _FailingSolver()
+    backend._fast, robust = failing, backend._robust
+    assert robust is not None
+    planner = TractionAdaptivePlanner(TRUCK, CONFIG, backend=backend)
+    got = _run(planner, 3)
+    # Every step failed in the fast mode and was solved by the robust one: plans, not fallbacks.
+    assert all(p.ok and p.robust_qp_retry and not p.fallback for p in got)
+    # One solve per step after the cold start's CONFIG.cold_start_iterations; each failed
+    # solve is retried once, and the failed solver is reset before the retry.
+    solves = CONFIG.cold_start_iterations + 2
+    assert backend.robust_retries == failing.resets == solves and backend.last_solve_retried
+    # The robust mode solves the same QP: the plans agree with the fast mode's to solver
+    # tolerance (not bitwise: another interior-point path).
+    for a, b in zip(want, got, strict=True):
+        np.testing.assert_allclose(b.states, a.states, rtol=0, atol=1e-3)
+
+
+def test_without_the_retry_a_failed_fast_solve_is_a_fallback():
+    backend = AcadosBackend(TRUCK, CONFIG, robust_retry=False)
+    backend._fast = _FailingSolver()
+    planner = TractionAdaptivePlanner(TRUCK, CONFIG, backend=backend)
+    plans = _run(planner, 3)
+    assert all(p.fallback and not p.robust_qp_retry for p in plans)
+    assert backend.robust_retries == 0 and not backend.last_solve_retried
 
 
 # -- failure counting, solution checks -------------------------------------------------------------

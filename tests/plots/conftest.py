@@ -176,8 +176,8 @@ def make_log(name: str = "turn", config: str = "F", duration_s: float = 4.0,
         ))
         log.append(PlanningStep(
             step=step, t_s=t0, s_m=s[i0], mode="cruise", status=0, ok=True, fallback=False,
-            fallback_reason="", sampled_reinit=False, local_available=False, local_mu=np.nan,
-            estimate_source="current", estimate_age_s=0.0,
+            fallback_reason="", sampled_reinit=False, robust_qp_retry=False, local_available=False,
+            local_mu=np.nan, estimate_source="current", estimate_age_s=0.0,
         ))
         log.append(StepTiming(step=step, t_s=t0, solve_ms=5.0, step_ms=6.0))
         mu_grid = np.interp(s[i0] + grid, friction["s_m"], friction["mu"])

@@ -65,6 +65,9 @@ class RunMetrics:
         Planning steps that fell back to the shifted previous plan or a braking plan.
     sampling_reinits
         Planning steps whose initial guess came from the sampling augmentation.
+    robust_qp_retries
+        Planning steps whose fast QP failed and were solved again in the robust mode
+        (:mod:`mufusion.planner.acados_backend`); a retry that also fails is a fallback.
     feasibility, feasibility_margin_mps
         The physics oracle's class of the variant (feasible / marginal / infeasible) and its
         margin [m/s] (:mod:`mufusion.scenarios.feasibility`), from the run's metadata.
@@ -108,6 +111,8 @@ class RunMetrics:
     feasibility: str = "unknown"
     feasibility_margin_mps: float | None = None
     faults_injected: int = 0
+    # Defaults to 0: records written before the robust retry existed had none.
+    robust_qp_retries: int = 0
     estimate_fallbacks: int = 0
     component_errors: int = 0
     minimal_risk: bool = False
@@ -186,6 +191,9 @@ def compute_metrics(log: RunLog) -> RunMetrics:
         fallbacks=int(steps["fallback"].astype(bool).sum()) if not steps.empty else 0,
         sampling_reinits=(
             int(steps["sampled_reinit"].astype(bool).sum()) if not steps.empty else 0
+        ),
+        robust_qp_retries=(
+            int(steps["robust_qp_retry"].astype(bool).sum()) if not steps.empty else 0
         ),
         final_speed_mps=float(ts["speed_mps"].iloc[-1]),
         duration_s=float(ts["t_s"].iloc[-1]),

@@ -37,7 +37,18 @@ _log = logging.getLogger(__name__)
 _FORMAT_VERSION = "3"
 
 
-def problem_hash(params: VehicleParams, config: PlannerConfig) -> str:
+FAST_HPIPM_MODE = "SPEED"
+"""HPIPM's mode for every solve: about half the QP time of ``BALANCE`` on this problem."""
+ROBUST_HPIPM_MODE = "BALANCE"
+"""HPIPM's mode for a solve that failed in :data:`FAST_HPIPM_MODE`. ``SPEED`` skips safeguards
+of the interior-point iteration and at the handling limit returns NaN (acados status 4) on
+QPs that ``BALANCE`` solves: on the published turn grid it failed 173 planning steps of GT in
+variants the oracle calls feasible, and five failures in a row stopped the truck before the
+curve (docs/experiments.md, "A QP that fails at the limit")."""
+
+
+def problem_hash(params: VehicleParams, config: PlannerConfig,
+                 hpipm_mode: str = FAST_HPIPM_MODE) -> str:
     """Hash of everything that shapes the generated code."""
     text = json.dumps(
         {
@@ -46,30 +57,29 @@ def problem_hash(params: VehicleParams, config: PlannerConfig) -> str:
             "N": config.horizon_steps,
             "dt": config.dt_s,
             "sides": config.polygon_sides,
+            "hpipm_mode": hpipm_mode,
         },
         sort_keys=True,
     )
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-class AcadosBackend:
-    """One RTI iteration per call on the shared OCP description."""
+class _GeneratedSolver:
+    """One generated acados solver (one HPIPM mode) and the problem data last written to it."""
 
-    def __init__(self, params: VehicleParams, config: PlannerConfig) -> None:
-        at = load_acados_template()
-        self.params, self.config = params, config
+    def __init__(
+        self, at: ModuleType, params: VehicleParams, config: PlannerConfig, hpipm_mode: str
+    ) -> None:
         n = config.horizon_steps
-        digest = problem_hash(params, config)
+        digest = problem_hash(params, config, hpipm_mode)
         export = cache_dir() / f"tamp_{digest}"
         name = f"tamp_{digest}"
-        self._ubu = np.array(longitudinal_force_bounds_n(params)[1], dtype=float)
-
         lib = export / "acados_ocp_solver_pyx.so"
         if not lib.exists():
             # The problem description is needed only to generate the code (the hash names it).
             export.mkdir(parents=True, exist_ok=True)
             _log.info("generating and compiling the acados solver in %s", export)
-            ocp = _describe(at, params, config, name, export)
+            ocp = _describe(at, params, config, name, export, hpipm_mode)
             at.AcadosOcpSolver.generate(ocp, json_file=str(export / "ocp.json"))
             at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
         # The template imports the wrapper by a cwd-relative module path; load it by file instead.
@@ -78,6 +88,7 @@ class AcadosBackend:
             raise AcadosUnavailable(f"cannot load the generated solver {lib}")
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
+        self.n = n
         self.solver = module.AcadosOcpSolverCython(name, "SQP_RTI", n)
         # What solve() last wrote per problem field (stage rows), to skip unchanged stages.
         self._written: dict[str, np.ndarray] = {}
@@ -90,20 +101,12 @@ class AcadosBackend:
         p: np.ndarray,
         yref: np.ndarray,
         weights: np.ndarray,
-        d_lo: np.ndarray,
-        d_hi: np.ndarray,
-        min_speed_mps: float,
-        max_drive_force_n: float | None = None,
+        lbx: np.ndarray,
+        ubx: np.ndarray,
+        ubu: np.ndarray,
     ) -> tuple[int, np.ndarray, np.ndarray]:
-        """One RTI step; returns ``(status, states (N+1, 6), inputs (N, 3))``.
-
-        ``max_drive_force_n`` lowers the rear drive-force bound for this solve (``None``: the
-        actuator's bound)."""
-        s = self.solver
-        n = self.config.horizon_steps
-        ubu = self._ubu.copy()
-        if max_drive_force_n is not None:
-            ubu[1] = min(ubu[1], max_drive_force_n)
+        """Write the problem (changed stages only), run one RTI step, read the plan."""
+        s, n = self.solver, self.n
         s.set(0, "lbx", x0)
         s.set(0, "ubx", x0)
         for k in range(n):
@@ -121,10 +124,6 @@ class AcadosBackend:
         self._update("W", s.cost_set, w_stage[None], range(n))
         self._update("W_terminal", s.cost_set, w_stage[None, :N_STATES, :N_STATES], (n,))
         self._update("ubu", s.constraints_set, ubu[None], range(n))
-        lbx = np.empty((n, 2))
-        lbx[:, 0], lbx[:, 1] = d_lo, min_speed_mps
-        ubx = np.empty((n, 2))
-        ubx[:, 0], ubx[:, 1] = d_hi, MAX_SPEED_MPS
         self._update("lbx", s.constraints_set, lbx[:-1], range(1, n))
         self._update("ubx", s.constraints_set, ubx[:-1], range(1, n))
         self._update("lbx_terminal", s.constraints_set, lbx[-1:, :1], (n,))
@@ -158,16 +157,87 @@ class AcadosBackend:
         self._written[key] = values.copy()
 
     def reset(self) -> None:
+        """Zero every iterate (primal, dual, slacks) and the QP solver's memory."""
+        self.solver.reset(1)
+
+
+class AcadosBackend:
+    """One RTI iteration per call on the shared OCP description.
+
+    Each solve runs HPIPM in :data:`FAST_HPIPM_MODE`; a solve that fails there (a status other
+    than 0 or 2) is repeated once, on the same data, by a second generated solver in
+    :data:`ROBUST_HPIPM_MODE` (``robust_retry=False``: no second solver). ``robust_retries``
+    counts those repeats; ``last_solve_retried`` says whether the latest solve needed one.
+    """
+
+    def __init__(
+        self, params: VehicleParams, config: PlannerConfig, *, robust_retry: bool = True
+    ) -> None:
+        at = load_acados_template()
+        self.params, self.config = params, config
+        self._ubu = np.array(longitudinal_force_bounds_n(params)[1], dtype=float)
+        self._fast = _GeneratedSolver(at, params, config, FAST_HPIPM_MODE)
+        self._robust = (
+            _GeneratedSolver(at, params, config, ROBUST_HPIPM_MODE) if robust_retry else None
+        )
+        self.robust_retries = 0
+        self.last_solve_retried = False
+
+    def solvers(self) -> tuple[_GeneratedSolver, ...]:
+        """The generated solvers, fast mode first (for statistics and instrumentation)."""
+        return (self._fast,) if self._robust is None else (self._fast, self._robust)
+
+    def solve(
+        self,
+        x0: np.ndarray,
+        guess_x: np.ndarray,
+        guess_u: np.ndarray,
+        p: np.ndarray,
+        yref: np.ndarray,
+        weights: np.ndarray,
+        d_lo: np.ndarray,
+        d_hi: np.ndarray,
+        min_speed_mps: float,
+        max_drive_force_n: float | None = None,
+    ) -> tuple[int, np.ndarray, np.ndarray]:
+        """One RTI step; returns ``(status, states (N+1, 6), inputs (N, 3))``.
+
+        ``max_drive_force_n`` lowers the rear drive-force bound for this solve (``None``: the
+        actuator's bound)."""
+        n = self.config.horizon_steps
+        ubu = self._ubu.copy()
+        if max_drive_force_n is not None:
+            ubu[1] = min(ubu[1], max_drive_force_n)
+        lbx = np.empty((n, 2))
+        lbx[:, 0], lbx[:, 1] = d_lo, min_speed_mps
+        ubx = np.empty((n, 2))
+        ubx[:, 0], ubx[:, 1] = d_hi, MAX_SPEED_MPS
+        args = (x0, guess_x, guess_u, p, yref, weights, lbx, ubx, ubu)
+        self.last_solve_retried = False
+        status, xs, us = self._fast.solve(*args)
+        if status in (0, 2) or self._robust is None:
+            return status, xs, us
+        # The failed QP can leave NaN multipliers in the fast solver; its next solve starts
+        # clean, as after any failure (see reset).
+        self._fast.reset()
+        self.robust_retries += 1
+        self.last_solve_retried = True
+        return self._robust.solve(*args)
+
+    def reset(self) -> None:
         """Zero every iterate (primal, dual, slacks) and the QP solver's memory.
 
         After a failed QP the multipliers can hold NaN; ``solve`` overwrites x and u from the
         guess but not the multipliers, so without this every later RTI step fails as well.
         """
-        self.solver.reset(1)
+        self._fast.reset()
+        if self._robust is not None:
+            self._robust.reset()
 
 
 def _describe(
-    at: ModuleType, params: VehicleParams, config: PlannerConfig, name: str, export: Path
+    at: ModuleType, params: VehicleParams, config: PlannerConfig, name: str, export: Path,
+    hpipm_mode: str,
 ) -> Any:
     """The ``AcadosOcp`` description of the shared problem (for code generation)."""
     import casadi as ca
@@ -229,8 +299,7 @@ def _describe(
     so.nlp_solver_type = "SQP_RTI"
     so.qp_solver = "PARTIAL_CONDENSING_HPIPM"
     so.qp_solver_cond_N = max(1, n // 4)
-    # SPEED mode halves the QP time here (1.1 vs 2.1 ms at N = 40) with the same closed loop.
-    so.hpipm_mode = "SPEED"
+    so.hpipm_mode = hpipm_mode
     so.hessian_approx = "GAUSS_NEWTON"
     so.integrator_type = "ERK"
     so.sim_method_num_stages = 4

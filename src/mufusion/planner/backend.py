@@ -15,7 +15,11 @@ class PlannerBackend(Protocol):
     the corridor ``(N,)`` × 2, the lowest speed and the drive-force cap; it returns
     ``(status, states, inputs)`` with status 0 or 2 for a usable solution. It may raise.
     ``reset`` forgets every iterate and solver memory (after a failure).
+    ``last_solve_retried`` is True when the latest solve needed a second, more robust attempt
+    (logged with the plan).
     """
+
+    last_solve_retried: bool
 
     def solve(
         self,

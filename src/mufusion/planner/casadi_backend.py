@@ -28,6 +28,8 @@ from mufusion.vehicle.planner_model import N_INPUTS, N_STATES, Input, State, fre
 class CasadiBackend:
     """Multiple shooting with one RK4 step per stage (as acados' ERK), solved by IPOPT."""
 
+    last_solve_retried = False  # IPOPT is the robust solver: nothing to retry with
+
     def __init__(self, params: VehicleParams, config: PlannerConfig) -> None:
         import casadi as ca
 

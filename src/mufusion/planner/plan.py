@@ -48,6 +48,8 @@ class Plan:
     fallback: bool
     solve_time_s: float
     sampled_reinit: bool = False
+    robust_qp_retry: bool = False
+    """The fast QP failed and the solve was repeated in the robust mode (acados backend)."""
     dt_s: float = 0.1
     fallback_reason: FallbackReason = FallbackReason.NONE
     consecutive_fallbacks: int = 0

@@ -247,6 +247,7 @@ class TractionAdaptivePlanner:
         braking = mode in ("emergency", "minimal_risk")
         xs, us = guess_x, guess_u
         reason = FallbackReason.NONE
+        retried = False
         for _ in range(iterations):
             guess_x, guess_u = xs, us
             speed_ref: float | np.ndarray = reference_speed_mps
@@ -278,6 +279,7 @@ class TractionAdaptivePlanner:
                     # limit after an evasion leaves the driven axle no lateral reserve.
                     par.mass_kg * cfg.max_cruise_accel_mps2 if mode == "cruise" else 0.0,
                 )
+                retried = retried or self._backend.last_solve_retried
                 if status not in (0, 2):
                     reason = FallbackReason.SOLVER_STATUS
                 else:
@@ -306,7 +308,8 @@ class TractionAdaptivePlanner:
             normal_load_rear_n=stage["fzr"], force_limit_front_n=stage["radius_front"],
             force_limit_rear_n=stage["radius_rear"], status=int(status), ok=good,
             fallback=not good, solve_time_s=time.perf_counter() - started,
-            sampled_reinit=sampled, dt_s=cfg.dt_s, fallback_reason=reason,
+            sampled_reinit=sampled, robust_qp_retry=retried, dt_s=cfg.dt_s,
+            fallback_reason=reason,
             consecutive_fallbacks=self._consecutive_fallbacks,
             mu_sanitized_stages=mu_of_s.last_count, mode=mode,
         )

@@ -136,6 +136,7 @@ class Recorder:
                 fallback=plan is None or bool(plan.fallback),
                 fallback_reason=reason,
                 sampled_reinit=plan is not None and bool(plan.sampled_reinit),
+                robust_qp_retry=plan is not None and bool(plan.robust_qp_retry),
                 local_available=bool(estimate.local_available),
                 local_mu=finite_or_nan(estimate.local_mu),
                 estimate_source=estimate_source,

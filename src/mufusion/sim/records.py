@@ -93,6 +93,8 @@ class PlanningStep:
     fallback: bool
     fallback_reason: str
     sampled_reinit: bool
+    robust_qp_retry: bool
+    """The fast QP failed and the robust one was tried (the plan's ``robust_qp_retry``)."""
     local_available: bool
     local_mu: float
     estimate_source: str
