@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from mufusion.metrics import compute_metrics
+from mufusion.planner import FallbackReason
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
 
@@ -30,3 +31,19 @@ def test_gt_drives_a_feasible_turn_instead_of_stopping_for_failed_qps() -> None:
     curve_end_s = cfg.start_s_m + 40.0 + 28.0 * cfg.turn.angle_rad
     assert log.timeseries["s_m"].iloc[-1] > curve_end_s
     assert m.final_speed_mps > 5.0
+
+
+def test_the_log_says_why_a_step_fell_back() -> None:
+    # 18 m/s onto μ 0.2 with the curve 5 m ahead (infeasible): the solver returns plans, but
+    # they leave the friction polygons or the corridor and are rejected as implausible; the log
+    # used to call every fallback "solver".
+    cfg = load_scenario("turn", overrides=[
+        "initial_speed_mps=18", "friction.mu_turn=0.2", "turn.start_ahead_m=5",
+        "duration_s=1.5",
+    ])
+    steps = run_scenario(cfg, "GT").planning_steps
+    fell_back = steps[steps["fallback"].astype(bool)]
+    assert len(fell_back) > 5
+    assert set(fell_back["fallback_reason"]) <= {r.value for r in FallbackReason} - {"none"}
+    assert "implausible" in set(fell_back["fallback_reason"])
+    assert (steps.loc[~steps["fallback"].astype(bool), "fallback_reason"].fillna("") == "").all()

@@ -124,7 +124,9 @@ class Recorder:
         ``plan`` is None when the step produced no plan of its own (the planner raised or was
         made to fail); the loop then keeps the previous plan, which is not logged again.
         """
-        reason = fallback_reason or ("solver" if plan is not None and plan.fallback else "")
+        reason = fallback_reason or (
+            plan.fallback_reason.value if plan is not None and plan.fallback else ""
+        )
         self.log.append(
             PlanningStep(
                 step=step,

@@ -92,6 +92,9 @@ class PlanningStep:
     ok: bool
     fallback: bool
     fallback_reason: str
+    """Why the step has no fresh plan: the loop's reason (an injected solver failure, the
+    planner raised) or the planner's :class:`~mufusion.planner.FallbackReason` value
+    (``solver_status``, ``non_finite``, ``implausible``, ``exception``); empty otherwise."""
     sampled_reinit: bool
     robust_qp_retry: bool
     """The fast QP failed and the robust one was tried (the plan's ``robust_qp_retry``)."""
