@@ -26,7 +26,12 @@ def test_gt_drives_a_feasible_turn_instead_of_stopping_for_failed_qps() -> None:
     m = compute_metrics(log)
     assert m.feasibility == "feasible"
     assert m.robust_qp_retries > 0  # the fast mode still fails here: the retry is exercised
-    assert m.fallbacks == 0 and not m.minimal_risk
+    # With the front force as a state both modes fail on an isolated step (the shifted plan is
+    # kept, as for any fallback); never the five in a row that start the stop.
+    assert m.fallbacks < 5 and not m.minimal_risk
+    # And with plans the steering can follow, GT keeps its footprint in the lane here (it left
+    # it by 8 cm when its plans reversed the front force from stage to stage).
+    assert m.max_lane_excursion_m == 0.0
     # It drove through the 90° curve: the run ends past the curve's end, still moving.
     curve_end_s = cfg.start_s_m + 40.0 + 28.0 * cfg.turn.angle_rad
     assert log.timeseries["s_m"].iloc[-1] > curve_end_s

@@ -14,6 +14,14 @@ from typing import Any
 import numpy as np
 
 from mufusion.planner.acados_loader import AcadosUnavailable, cache_dir, load_acados_template
+from mufusion.planner.front_force import (
+    FRONT_FORCE,
+    augmented_problem,
+    front_force_rate_bound_n_per_s,
+    ocp_state_count,
+    plan_from_augmented,
+    tire_forces,
+)
 from mufusion.planner.ocp import (
     MAX_SPEED_MPS,
     N_PARAMS,
@@ -58,6 +66,8 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "dt": config.dt_s,
             "sides": config.polygon_sides,
             "hpipm_mode": hpipm_mode,
+            "steering_rate_limit": config.steering_rate_limit,
+            "utilization": config.utilization_factor,
         },
         sort_keys=True,
     )
@@ -89,6 +99,8 @@ class _GeneratedSolver:
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
         self.n = n
+        self.augmented = config.steering_rate_limit
+        self.polygon_sides, self.dt_s = config.polygon_sides, config.dt_s
         self.solver = module.AcadosOcpSolverCython(name, "SQP_RTI", n)
         # What solve() last wrote per problem field (stage rows), to skip unchanged stages.
         self._written: dict[str, np.ndarray] = {}
@@ -105,8 +117,14 @@ class _GeneratedSolver:
         ubx: np.ndarray,
         ubu: np.ndarray,
     ) -> tuple[int, np.ndarray, np.ndarray]:
-        """Write the problem (changed stages only), run one RTI step, read the plan."""
+        """Write the problem (changed stages only), run one RTI step, read the plan.
+
+        Takes and returns the planner's states ``(N+1, 6)`` and forces ``(N, 3)``; with the
+        steering's rate limit the OCP's front-force state is formed and dropped here."""
         s, n = self.solver, self.n
+        if self.augmented:
+            x0, guess_x, guess_u = augmented_problem(
+                x0, guess_x, guess_u, p, self.polygon_sides, self.dt_s)
         s.set(0, "lbx", x0)
         s.set(0, "ubx", x0)
         for k in range(n):
@@ -131,6 +149,8 @@ class _GeneratedSolver:
         status = s.solve()
         xs = np.array([s.get(k, "x") for k in range(n + 1)])
         us = np.array([s.get(k, "u") for k in range(n)])
+        if self.augmented:
+            xs, us = plan_from_augmented(xs, us)
         return int(status), xs, us
 
     def _update(self, key: str, setter, values: np.ndarray, stages: Sequence[int]) -> None:
@@ -175,7 +195,8 @@ class AcadosBackend:
     ) -> None:
         at = load_acados_template()
         self.params, self.config = params, config
-        self._ubu = np.array(longitudinal_force_bounds_n(params)[1], dtype=float)
+        # The lower input bounds never change and stay as generated; the drive bound varies.
+        self._ubu = _input_bounds(params, config)[1]
         self._fast = _GeneratedSolver(at, params, config, FAST_HPIPM_MODE)
         self._robust = (
             _GeneratedSolver(at, params, config, ROBUST_HPIPM_MODE) if robust_retry else None
@@ -207,7 +228,7 @@ class AcadosBackend:
         n = self.config.horizon_steps
         ubu = self._ubu.copy()
         if max_drive_force_n is not None:
-            ubu[1] = min(ubu[1], max_drive_force_n)
+            ubu[-1] = min(ubu[-1], max_drive_force_n)
         lbx = np.empty((n, 2))
         lbx[:, 0], lbx[:, 1] = d_lo, min_speed_mps
         ubx = np.empty((n, 2))
@@ -235,6 +256,16 @@ class AcadosBackend:
             self._robust.reset()
 
 
+def _input_bounds(params: VehicleParams, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of the bounded inputs: ``(F_xf, F_xr)``, led by the front force's rate with the
+    steering's rate limit (``F_xr`` last either way)."""
+    lower, upper = longitudinal_force_bounds_n(params)
+    if config.steering_rate_limit:
+        rate = front_force_rate_bound_n_per_s(params, config)
+        lower, upper = np.concatenate([[-rate], lower]), np.concatenate([[rate], upper])
+    return np.array(lower, dtype=float), np.array(upper, dtype=float)
+
+
 def _describe(
     at: ModuleType, params: VehicleParams, config: PlannerConfig, name: str, export: Path,
     hpipm_mode: str,
@@ -246,15 +277,22 @@ def _describe(
     ocp = at.AcadosOcp()
     model = at.AcadosModel()
     model.name = name
-    x = ca.SX.sym("x", N_STATES)
+    nx = ocp_state_count(config)
+    x = ca.SX.sym("x", nx)
     u = ca.SX.sym("u", N_INPUTS)
     p = ca.SX.sym("p", N_PARAMS)
     model.x, model.u, model.p = x, u, p
-    model.xdot = ca.SX.sym("xdot", N_STATES)
-    f = frenet_bicycle_dynamics(x, u, p[Param.curvature], p[Param.rear_stiffness], params)
+    model.xdot = ca.SX.sym("xdot", nx)
+    # With the steering's rate limit the tire forces are (F_yf state, F_xf, F_xr) and the input's
+    # F_yf slot is the force's rate (planner/front_force.py).
+    forces = tire_forces(x, u) if config.steering_rate_limit else u
+    f = frenet_bicycle_dynamics(x[:N_STATES], forces, p[Param.curvature],
+                                p[Param.rear_stiffness], params)
+    if config.steering_rate_limit:
+        f = ca.vertcat(f, u[Input.fyf])
     model.f_expl_expr = f
     model.f_impl_expr = model.xdot - f
-    model.con_h_expr = constraint_expressions(x, u, p, params, ns)
+    model.con_h_expr = constraint_expressions(x[:N_STATES], forces, p, params, ns)
     ocp.model = model
     ocp.dims.N = n
     ocp.parameter_values = np.ones(N_PARAMS)
@@ -262,15 +300,25 @@ def _describe(
     ny = N_STATES + N_INPUTS
     ocp.cost.cost_type = "LINEAR_LS"
     ocp.cost.cost_type_e = "LINEAR_LS"
-    ocp.cost.Vx = np.vstack([np.eye(N_STATES), np.zeros((N_INPUTS, N_STATES))])
-    ocp.cost.Vu = np.vstack([np.zeros((N_STATES, N_INPUTS)), np.eye(N_INPUTS)])
-    ocp.cost.Vx_e = np.eye(N_STATES)
+    # y = [planner state (6), F_yf, F_xf, F_xr]: the tracking reference's layout. With the
+    # steering's rate limit the F_yf weight acts on the force state; the rate is bounded only.
+    vx = np.zeros((ny, nx))
+    vx[:N_STATES, :N_STATES] = np.eye(N_STATES)
+    vu = np.zeros((ny, N_INPUTS))
+    vu[N_STATES:, :] = np.eye(N_INPUTS)
+    if config.steering_rate_limit:
+        vu[N_STATES + Input.fyf, Input.fyf] = 0.0
+        vx[N_STATES + Input.fyf, FRONT_FORCE] = 1.0
+    ocp.cost.Vx, ocp.cost.Vu = vx, vu
+    ocp.cost.Vx_e = np.eye(N_STATES, nx)
     ocp.cost.W = np.eye(ny)
     ocp.cost.W_e = np.eye(N_STATES)
     ocp.cost.yref = np.zeros(ny)
     ocp.cost.yref_e = np.zeros(N_STATES)
 
-    ocp.constraints.x0 = np.array([0, 0, 0, 0, 10.0, 0])
+    x0_example = np.zeros(nx)
+    x0_example[State.vx] = 10.0
+    ocp.constraints.x0 = x0_example
     ocp.constraints.idxbx = np.array([State.d, State.vx])
     ocp.constraints.lbx = np.array([-1.0, 0.0])
     ocp.constraints.ubx = np.array([1.0, MAX_SPEED_MPS])
@@ -279,8 +327,10 @@ def _describe(
     ocp.constraints.lbx_e = np.array([-1.0])
     ocp.constraints.ubx_e = np.array([1.0])
     ocp.constraints.idxsbx_e = np.array([0])
-    ocp.constraints.idxbu = np.array([Input.fxf, Input.fxr])
-    ocp.constraints.lbu, ocp.constraints.ubu = longitudinal_force_bounds_n(params)
+    ocp.constraints.idxbu = np.array(
+        [Input.fyf, Input.fxf, Input.fxr] if config.steering_rate_limit else [Input.fxf, Input.fxr]
+    )
+    ocp.constraints.lbu, ocp.constraints.ubu = _input_bounds(params, config)
     ocp.constraints.lh = np.full(2 * ns, POLYGON_ROW_LOWER_BOUND)
     ocp.constraints.uh = np.zeros(2 * ns)
     # Front forces are inputs and always have a feasible choice (hard); the rear lateral force

@@ -11,6 +11,13 @@ from typing import Any
 
 import numpy as np
 
+from mufusion.planner.front_force import (
+    augmented_problem,
+    front_force_rate_bound_n_per_s,
+    ocp_state_count,
+    plan_from_augmented,
+    tire_forces,
+)
 from mufusion.planner.ocp import (
     MAX_SPEED_MPS,
     N_PARAMS,
@@ -36,23 +43,31 @@ class CasadiBackend:
         self.params, self.config = params, config
         n, ns, dt = config.horizon_steps, config.polygon_sides, config.dt_s
         pen = slack_penalties(config.weights, ns)
-        x = ca.SX.sym("x", N_STATES)
+        augmented = config.steering_rate_limit
+        nx = ocp_state_count(config)
+        x = ca.SX.sym("x", nx)
         u = ca.SX.sym("u", N_INPUTS)
         p = ca.SX.sym("p", N_PARAMS)
 
+        def forces(xx, uu):
+            # With the steering's rate limit F_yf is a state and the input's slot its rate.
+            return tire_forces(xx, uu) if augmented else uu
+
         def f(xx):
-            return frenet_bicycle_dynamics(xx, u, p[Param.curvature], p[Param.rear_stiffness],
-                                           params)
+            dx = frenet_bicycle_dynamics(xx[:N_STATES], forces(xx, u), p[Param.curvature],
+                                         p[Param.rear_stiffness], params)
+            return ca.vertcat(dx, u[Input.fyf]) if augmented else dx
 
         k1 = f(x)
         k2 = f(x + 0.5 * dt * k1)
         k3 = f(x + 0.5 * dt * k2)
         k4 = f(x + dt * k3)
         step = ca.Function("step", [x, u, p], [x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)])
-        h = ca.Function("h", [x, u, p], [constraint_expressions(x, u, p, params, ns)])
+        h = ca.Function("h", [x, u, p],
+                        [constraint_expressions(x[:N_STATES], forces(x, u), p, params, ns)])
 
         ny = N_STATES + N_INPUTS
-        X = ca.SX.sym("X", N_STATES, n + 1)
+        X = ca.SX.sym("X", nx, n + 1)
         U = ca.SX.sym("U", N_INPUTS, n)
         S_lo = ca.SX.sym("S_lo", n)  # d-bound slacks, stages 1..N
         S_hi = ca.SX.sym("S_hi", n)
@@ -60,7 +75,7 @@ class CasadiBackend:
         P = ca.SX.sym("P", N_PARAMS, n)
         YREF = ca.SX.sym("YREF", ny, n + 1)
         WD = ca.SX.sym("WD", ny)
-        X0 = ca.SX.sym("X0", N_STATES)
+        X0 = ca.SX.sym("X0", nx)
         DLO = ca.SX.sym("DLO", n)
         DHI = ca.SX.sym("DHI", n)
 
@@ -69,16 +84,16 @@ class CasadiBackend:
 
         corridor, rear = pen.corridor, pen.rear_polygon
         cost: Any = 0
-        g, lbg, ubg = [X[:, 0] - X0], [0.0] * N_STATES, [0.0] * N_STATES
+        g, lbg, ubg = [X[:, 0] - X0], [0.0] * nx, [0.0] * nx
         for k in range(n):
-            r = ca.vertcat(X[:, k], U[:, k]) - YREF[:, k]
+            r = ca.vertcat(X[:N_STATES, k], forces(X[:, k], U[:, k])) - YREF[:, k]
             cost += dt * 0.5 * ca.sum1(WD * r**2)
             cost += dt * slack_cost(
                 S_r[:, k], pen.linear_stage[rear], pen.quadratic_stage[rear]
             )
             g.append(X[:, k + 1] - step(X[:, k], U[:, k], P[:, k]))
-            lbg += [0.0] * N_STATES
-            ubg += [0.0] * N_STATES
+            lbg += [0.0] * nx
+            ubg += [0.0] * nx
             hk = h(X[:, k], U[:, k], P[:, k])
             g.append(hk[:ns])
             lbg += [POLYGON_ROW_LOWER_BOUND] * ns
@@ -98,10 +113,11 @@ class CasadiBackend:
             g.append(X[State.d, k + 1] - S_hi[k] - DHI[k])
             lbg.append(-np.inf)
             ubg.append(0.0)
-        r_e = X[:, n] - YREF[:N_STATES, n]
+        r_e = X[:N_STATES, n] - YREF[:N_STATES, n]
         cost += 0.5 * ca.sum1(WD[:N_STATES] * r_e**2)
 
-        self._n_x = N_STATES * (n + 1)
+        self._nx, self._augmented = nx, augmented
+        self._n_x = nx * (n + 1)
         self._n_u = N_INPUTS * n
         z = ca.vertcat(ca.vec(X), ca.vec(U), S_lo, S_hi, ca.vec(S_r))
         par = ca.vertcat(ca.vec(P), ca.vec(YREF), WD, X0, DLO, DHI)
@@ -113,8 +129,9 @@ class CasadiBackend:
              "ipopt.max_iter": 300, "ipopt.sb": "yes"},
         )
         lower, upper = longitudinal_force_bounds_n(params)
-        lbu = np.tile([-np.inf, lower[0], lower[1]], (n, 1))
-        ubu = np.tile([np.inf, upper[0], upper[1]], (n, 1))
+        rate = front_force_rate_bound_n_per_s(params, config) if augmented else np.inf
+        lbu = np.tile([-rate, lower[0], lower[1]], (n, 1))
+        ubu = np.tile([rate, upper[0], upper[1]], (n, 1))
         self._lbu, self._ubu = lbu, ubu
         self._n_slack = 2 * n + ns * n
 
@@ -125,8 +142,11 @@ class CasadiBackend:
         ubu = self._ubu.copy()
         if max_drive_force_n is not None:
             ubu[:, 2] = np.minimum(ubu[:, 2], max_drive_force_n)
-        lbx_x = np.full((n + 1, N_STATES), -np.inf)
-        ubx_x = np.full((n + 1, N_STATES), np.inf)
+        if self._augmented:
+            x0, guess_x, guess_u = augmented_problem(
+                x0, guess_x, guess_u, p, self.config.polygon_sides, self.config.dt_s)
+        lbx_x = np.full((n + 1, self._nx), -np.inf)
+        ubx_x = np.full((n + 1, self._nx), np.inf)
         # vx bounds at stages 1..N-1 are hard, as in the acados description.
         lbx_x[1:n, State.vx] = min_speed_mps
         ubx_x[1:n, State.vx] = MAX_SPEED_MPS
@@ -137,8 +157,10 @@ class CasadiBackend:
         sol = self._solver(x0=z0, p=par, lbx=lbz, ubx=ubz, lbg=self._lbg, ubg=self._ubg)
         ok = bool(self._solver.stats()["success"])
         z = np.asarray(sol["x"]).ravel()
-        xs = z[: self._n_x].reshape(n + 1, N_STATES)
+        xs = z[: self._n_x].reshape(n + 1, self._nx)
         us = z[self._n_x : self._n_x + self._n_u].reshape(n, N_INPUTS)
+        if self._augmented:
+            xs, us = plan_from_augmented(xs, us)
         return (0 if ok else 1), xs, us
 
     def reset(self) -> None:

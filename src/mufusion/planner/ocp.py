@@ -158,6 +158,9 @@ class PlannerConfig:
     # Track min(cruise speed, the point mass's highest speed along the lane centre) instead of the
     # cruise speed alone (planner/speed_profile.py).
     curve_speed_reference: bool = True
+    # Plan the front lateral force as a state whose rate the steering's rate limit bounds
+    # (planner/front_force.py; beyond the paper, whose forces are free inputs).
+    steering_rate_limit: bool = True
 
     def __post_init__(self) -> None:
         if self.stiffness not in STIFFNESS_MODELS:

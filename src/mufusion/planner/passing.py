@@ -22,7 +22,23 @@ import numpy as np
 from mufusion.vehicle.braking import stopping_distance_m
 from mufusion.vehicle.params import GRAVITY_MPS2
 
-__all__ = ["blocks_road", "passing_left", "stopping_distance_m", "stopping_possible"]
+__all__ = ["blocks_road", "in_path", "passing_left", "stopping_distance_m", "stopping_possible"]
+
+
+def in_path(obstacle_s_m: float, obstacle_d_m: float, clearance_m: float, s_m: float,
+            d_m: float) -> bool:
+    """Whether an obstacle lies ahead in the vehicle's path.
+
+    Ahead of the reference point (``obstacle_s_m > s_m``) and closer laterally than the
+    clearance the vehicle needs to pass it (``|obstacle_d_m − d_m| < clearance_m``: half the
+    obstacle's and the vehicle's widths plus the planner's margin).
+
+    Examples
+    --------
+    >>> in_path(20.0, 1.5, 1.75, 0.0, 0.0), in_path(20.0, 1.5, 1.75, 0.0, -0.3)
+    (True, False)
+    """
+    return obstacle_s_m > s_m and abs(obstacle_d_m - d_m) < clearance_m
 
 
 def passing_left(

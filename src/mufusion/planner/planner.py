@@ -29,6 +29,7 @@ from mufusion.planner.ocp import (
     stage_parameters,
     tracking_reference,
 )
+from mufusion.planner.passing import in_path
 from mufusion.planner.plan import FallbackReason, Plan
 from mufusion.planner.safeguards import FrictionProfile, SanitizedFriction, check_solution
 from mufusion.planner.sampling import (
@@ -45,6 +46,7 @@ from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
     N_STATES,
+    Input,
     State,
     rear_lateral_force_n,
 )
@@ -162,6 +164,19 @@ class TractionAdaptivePlanner:
         xs[1:, State.dpsi] = xs[1:, State.psidot] = xs[1:, State.vy] = 0.0
         return xs, np.zeros((n, N_INPUTS))
 
+    def _previous_front_force_n(self, x0: np.ndarray, t_s: float) -> float | None:
+        """The front lateral force the previous plan commands at ``t_s`` (``None``: no usable plan).
+
+        The same shift and jump test as :meth:`_initial_guess`."""
+        n, dt = self.config.horizon_steps, self.config.dt_s
+        prev = self._prev
+        if prev is None or not np.all(np.isfinite(prev.inputs)):
+            return None
+        shift = int(min(max(round((t_s - prev.t0_s) / dt), 0), n))
+        if shift > n - 1 or abs(prev.states[shift, State.s] - x0[State.s]) >= 10.0:
+            return None
+        return float(prev.inputs[shift, Input.fyf])
+
     # -- one planning step ----------------------------------------------------------------------
     def step(
         self,
@@ -226,6 +241,15 @@ class TractionAdaptivePlanner:
             o if isinstance(o, PlannerObstacle) else PlannerObstacle(*map(float, o))
             for o in obstacles
         ]
+        if mode == "emergency":
+            # The stop is in front of the obstacles in the path: the plan needs no room beside
+            # them. Left in, the corridor (placed along the guess, which may still run past the
+            # obstacle) opens a side and the stopping plan swerves into it at the friction limit:
+            # its rear axle exceeds the polygon, the plan is rejected, the shifted cruise plan is
+            # kept, and the stop under way turns into a late swerve (docs/experiments.md).
+            clear = 0.5 * par.width_m + cfg.obstacle_margin_m
+            obstacles = [o for o in obstacles if not in_path(
+                o.s_m, o.d_m, clear + 0.5 * o.width_m, float(x0[State.s]), float(x0[State.d]))]
         mu_of_s = SanitizedFriction(mu_hat_of_s, self._mu_profile, cfg.safety.mu_floor)
         started = time.perf_counter()
         sampled = False
@@ -241,6 +265,14 @@ class TractionAdaptivePlanner:
                     x0, guess_x, guess_u, curvature_of_s, mu_of_s, obstacles, v_ref,
                     reference_d_m, lo_lane, hi_lane,
                 )
+        if cfg.steering_rate_limit:
+            # The front force cannot jump: the plan starts from the force the previous plan
+            # commands now, whatever guess (sampled roll-out, minimal-risk roll-out) it starts
+            # from (planner/front_force.py).
+            applied = self._previous_front_force_n(x0, t_s)
+            if applied is not None:
+                guess_u = guess_u.copy()
+                guess_u[0, Input.fyf] = applied
         # One real-time iteration per step; a cold start has no converged plan to iterate from,
         # so it takes a few (re-linearised at each iterate, as the next steps would).
         iterations = 1 if self._prev is not None else cfg.cold_start_iterations

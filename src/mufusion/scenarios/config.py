@@ -143,6 +143,10 @@ class PlannerSettings(_Strict):
     """Track the highest speed a point mass could hold along the road with μ̂ (curves and
     friction ahead, beyond the horizon) instead of the cruise speed alone
     (``docs/feasibility.md``, "GT at the limit")."""
+    steering_rate_limit: bool = True
+    """Plan the front lateral force as a state whose rate the steering actuator's rate limit
+    bounds (:mod:`mufusion.planner.front_force`); ``false``: the forces are free inputs, as in
+    the paper's planner."""
     brake_first: bool = True
     """Stop in front of an obstacle in the path whenever the friction the planner may use
     allows it (or no side has room), and evade only otherwise; ``false``: evade whenever an

@@ -60,6 +60,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         backend=cfg.planner.backend,
         use_sampling=cfg.planner.use_sampling,
         curve_speed_reference=cfg.planner.curve_speed_reference,
+        steering_rate_limit=cfg.planner.steering_rate_limit,
         lane_d_min_m=lo,
         lane_d_max_m=hi,
         safety=cfg.safety,

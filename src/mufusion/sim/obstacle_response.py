@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.planner import PlannerConfig, PlannerObstacle
-from mufusion.planner.passing import blocks_road, stopping_possible
+from mufusion.planner.passing import blocks_road, in_path, stopping_possible
 from mufusion.sim.components import PlanningMode
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import State
@@ -94,7 +94,7 @@ def obstacle_mode(
     for ob in obstacles:
         clear = 0.5 * (ob.width_m + params.width_m) + response.margin_m
         ahead = ob.s_m - s_ego
-        if ahead <= 0.0 or abs(ob.d_m - d_ego) >= clear:
+        if not in_path(ob.s_m, ob.d_m, clear, s_ego, d_ego):
             continue  # beside or behind the vehicle, or not in its path
         if blocks_road(ob.d_m, clear, *lane_bounds_m):
             return "emergency"

@@ -151,6 +151,29 @@ _FAR_SLIP = 1e3
 
 
 @functools.lru_cache(maxsize=32)
+def front_force_rate_limit_n_per_s(params: VehicleParams, utilization: float) -> float:
+    """Fastest change of the front lateral force the steering can make [N/s].
+
+    ``K_α · s(λ) · F_z,f · δ̇_max``: the front tire's cornering stiffness per load ``K_α`` at the
+    static front load, reduced by the secant factor ``s(λ)`` at the planner's utilisation λ (as
+    the rear tire's stiffness is, :func:`rear_cornering_stiffness_n_per_rad`: near the friction
+    limit the force follows the slip angle more slowly than at zero slip), times the steering's
+    rate limit.
+
+    Examples
+    --------
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> tangent = (TRUCK.tire.cornering_stiffness_per_load_1_per_rad * TRUCK.static_front_load_n
+    ...            * TRUCK.max_steer_rate_radps)  # 7/rad · 52.8 kN · 0.9 rad/s
+    >>> round(tangent / 1e3), round(front_force_rate_limit_n_per_s(TRUCK, 0.9) / tangent, 3)
+    (333, 0.604)
+    """
+    return (params.tire.cornering_stiffness_per_load_1_per_rad
+            * secant_stiffness_factor(params.tire, utilization)
+            * params.static_front_load_n * params.max_steer_rate_radps)
+
+
+@functools.lru_cache(maxsize=32)
 def secant_stiffness_factor(tire: TireParams, utilization: float) -> float:
     """Secant / tangent stiffness of the lateral Magic Formula at ``utilization`` of its peak.
 

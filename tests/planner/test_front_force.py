@@ -1,0 +1,123 @@
+"""The front lateral force as an OCP state: its rate bound, the translation at the backends'
+boundary and plans that respect the steering's rate limit in both backends."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mufusion.planner.front_force import (
+    FRONT_FORCE,
+    INITIAL_FORCE_SHARE,
+    augmented_problem,
+    front_force_rate_bound_n_per_s,
+    ocp_state_count,
+    plan_from_augmented,
+)
+from mufusion.planner.ocp import Param, PlannerConfig, polygon_directions
+from mufusion.planner.planner import TractionAdaptivePlanner
+from mufusion.vehicle.params import CAR, TRUCK
+from mufusion.vehicle.planner_model import N_STATES, Input, secant_stiffness_factor
+
+N, DT = 8, 0.1
+
+
+def test_rate_bound_by_hand():
+    # K_α · s(λ) · F_z,f · δ̇_max with the car's numbers written out.
+    config = PlannerConfig(steering_rate_limit=True, utilization_factor=0.9)
+    front_load_n = CAR.mass_kg * 9.81 * CAR.cog_to_rear_axle_m / (
+        CAR.cog_to_front_axle_m + CAR.cog_to_rear_axle_m)
+    expected = (CAR.tire.cornering_stiffness_per_load_1_per_rad
+                * secant_stiffness_factor(CAR.tire, 0.9) * front_load_n * CAR.max_steer_rate_radps)
+    assert front_force_rate_bound_n_per_s(CAR, config) == pytest.approx(expected, rel=1e-3)
+    # A slower steering, a proportionally smaller bound; nearer the limit, a softer tire.
+    slow = dataclasses.replace(TRUCK, max_steer_rate_radps=0.45)
+    assert front_force_rate_bound_n_per_s(slow, config) == pytest.approx(
+        0.5 * front_force_rate_bound_n_per_s(TRUCK, config))
+    assert (front_force_rate_bound_n_per_s(TRUCK, dataclasses.replace(config,
+                                                                     utilization_factor=0.7))
+            > front_force_rate_bound_n_per_s(TRUCK, config))
+
+
+def test_state_count_follows_the_switch():
+    assert ocp_state_count(PlannerConfig(steering_rate_limit=False)) == N_STATES
+    assert ocp_state_count(PlannerConfig()) == N_STATES + 1  # the product's default
+
+
+def _stage_params(radius_front_n: float) -> np.ndarray:
+    p = np.ones((N + 1, len(Param)))
+    p[:, Param.radius_front] = radius_front_n
+    return p
+
+
+forces = st.lists(st.floats(-4e4, 4e4), min_size=N, max_size=N)
+
+
+@given(fyf=forces, seed=st.integers(0, 2**16))
+@settings(max_examples=50, deadline=None)
+def test_translation_round_trip(fyf, seed):
+    rng = np.random.default_rng(seed)
+    guess_x = rng.normal(size=(N + 1, N_STATES))
+    guess_u = rng.normal(size=(N, 3)) * 1e4
+    guess_u[:, Input.fyf] = fyf
+    x0 = guess_x[0] + 0.1
+    radius = 5e4  # every force of the draw lies inside the first stage's inscribed radius
+    x0a, xa, ua = augmented_problem(x0, guess_x, guess_u, _stage_params(radius), 12, DT)
+    assert x0a.shape == (N_STATES + 1,) and xa.shape == (N + 1, N_STATES + 1)
+    np.testing.assert_array_equal(x0a[:N_STATES], x0)
+    assert x0a[FRONT_FORCE] == guess_u[0, Input.fyf] == xa[0, FRONT_FORCE]
+    # The rate input integrates to the force states.
+    np.testing.assert_allclose(xa[0, FRONT_FORCE] + DT * np.cumsum(ua[:, Input.fyf]),
+                               xa[1:, FRONT_FORCE], atol=1e-6)
+    xs, us = plan_from_augmented(xa, ua)
+    np.testing.assert_array_equal(xs, guess_x)
+    np.testing.assert_array_equal(us, guess_u)
+
+
+def test_initial_force_clipped_into_the_first_polygon():
+    guess_x = np.zeros((N + 1, N_STATES))
+    guess_u = np.zeros((N, 3))
+    guess_u[:, Input.fyf] = -3e4  # after μ̂ dropped, outside a 2e4 N polygon
+    x0a, xa, ua = augmented_problem(guess_x[0], guess_x, guess_u, _stage_params(2e4), 12, DT)
+    _, ratio = polygon_directions(12)
+    assert x0a[FRONT_FORCE] == pytest.approx(-INITIAL_FORCE_SHARE * ratio * 2e4)
+    assert ua[0, Input.fyf] < 0.0  # the next stage's force is the guess's again
+
+
+def _s_curve(s):
+    s = np.asarray(s)
+    return np.where(s < 15.0, 0.0, np.where(s < 30.0, 1.0 / 30.0, -1.0 / 30.0))
+
+
+def _largest_rates(backend: str, rate_limit: bool, steps: int = 25):
+    """Largest planned |dF_yf/dt| over every plan and over the applied first stages."""
+    vehicle = dataclasses.replace(TRUCK, max_steer_rate_radps=0.3)
+    config = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=0.45, use_sampling=False,
+                           backend=backend, steering_rate_limit=rate_limit)
+    planner = TractionAdaptivePlanner(vehicle, config)
+    x = np.array([0.0, 0.0, 0.0, 0.0, 13.0, 0.0])
+    planned, applied = 0.0, []
+    for i in range(steps):
+        plan = planner.step(x, 0.1 * i, _s_curve, lambda s: 0.9 + 0.0 * np.asarray(s), [],
+                            "cruise", 13.0)
+        assert plan.ok
+        planned = max(planned, float(np.abs(np.diff(plan.inputs[:, Input.fyf])).max()) / 0.1)
+        applied.append(plan.inputs[0, Input.fyf])
+        x = plan.states[1]
+    steps_rate = float(np.abs(np.diff(applied)).max()) / 0.1
+    return planned, steps_rate, front_force_rate_bound_n_per_s(vehicle, config)
+
+
+@pytest.mark.parametrize("backend", ["acados", "casadi"])
+def test_plans_respect_the_steering_rate(backend):
+    # An S-bend at 13 m/s asks for ≈ 200 kN/s; a steering of 0.3 rad/s grants ≈ 67 kN/s.
+    free, _, bound = _largest_rates(backend, rate_limit=False)
+    assert free > 2.0 * bound  # the case needs the bound
+    planned, applied, bound = _largest_rates(backend, rate_limit=True)
+    assert planned <= bound * (1.0 + 1e-6)
+    # From plan to plan too: each starts from the force the previous one commands now.
+    assert applied <= bound * (1.0 + 1e-6)
