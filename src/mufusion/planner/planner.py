@@ -146,12 +146,22 @@ class TractionAdaptivePlanner:
         self._backend.reset()
 
     # -- the guess ------------------------------------------------------------------------------
+    def _previous_shift(self, x0: np.ndarray, t_s: float) -> int | None:
+        """Stages the previous plan has advanced by ``t_s`` (``None``: no plan to continue)."""
+        n, prev = self.config.horizon_steps, self._prev
+        if prev is None:
+            return None
+        shift = int(min(max(round((t_s - prev.t0_s) / self.config.dt_s), 0), n))  # np.clip's
+        if shift <= n - 1 and abs(prev.states[shift, State.s] - x0[State.s]) < 10.0:
+            return shift
+        return None
+
     def _initial_guess(self, x0: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray]:
         n, dt = self.config.horizon_steps, self.config.dt_s
         prev = self._prev
         if prev is not None and np.all(np.isfinite(prev.states)):
-            shift = int(min(max(round((t_s - prev.t0_s) / dt), 0), n))  # np.clip's value
-            if shift <= n - 1 and abs(prev.states[shift, State.s] - x0[State.s]) < 10.0:
+            shift = self._previous_shift(x0, t_s)
+            if shift is not None:
                 xs = np.concatenate([prev.states[shift:], np.repeat(prev.states[-1:], shift, 0)])
                 us = np.concatenate([prev.inputs[shift:], np.repeat(prev.inputs[-1:], shift, 0)])
                 xs = xs.copy()
@@ -165,17 +175,12 @@ class TractionAdaptivePlanner:
         return xs, np.zeros((n, N_INPUTS))
 
     def _previous_front_force_n(self, x0: np.ndarray, t_s: float) -> float | None:
-        """The front lateral force the previous plan commands at ``t_s`` (``None``: no usable plan).
-
-        The same shift and jump test as :meth:`_initial_guess`."""
-        n, dt = self.config.horizon_steps, self.config.dt_s
+        """The front lateral force the previous plan commands at ``t_s`` (``None``: none)."""
         prev = self._prev
         if prev is None or not np.all(np.isfinite(prev.inputs)):
             return None
-        shift = int(min(max(round((t_s - prev.t0_s) / dt), 0), n))
-        if shift > n - 1 or abs(prev.states[shift, State.s] - x0[State.s]) >= 10.0:
-            return None
-        return float(prev.inputs[shift, Input.fyf])
+        shift = self._previous_shift(x0, t_s)
+        return None if shift is None else float(prev.inputs[shift, Input.fyf])
 
     # -- one planning step ----------------------------------------------------------------------
     def step(
