@@ -85,6 +85,7 @@ def test_initial_force_clipped_into_the_first_polygon():
     x0a, xa, ua = augmented_problem(guess_x[0], guess_x, guess_u, _stage_params(2e4), 12, DT)
     _, ratio = polygon_directions(12)
     assert x0a[FRONT_FORCE] == pytest.approx(-INITIAL_FORCE_SHARE * ratio * 2e4)
+    assert xa[0, FRONT_FORCE] == x0a[FRONT_FORCE] and xa[1, FRONT_FORCE] == -3e4
     assert ua[0, Input.fyf] < 0.0  # the next stage's force is the guess's again
 
 
