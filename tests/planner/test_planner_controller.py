@@ -89,3 +89,56 @@ def test_steer_rate_is_limited_against_the_last_command_not_the_lagging_actuator
     assert abs(commands[-1] - 5 * step) < 1e-12
     ctrl.reset()
     assert abs(ctrl.command(0.0, x, 0.0, _plan(4e4, 0.0, 0.0), 0.0).steer_rad - step) < 1e-12
+
+
+def _brake_from_stage(k_brake: int, fxf: float = -2e4, fxr: float = -1e4) -> Plan:
+    plan = _plan(0.0, 0.0, 0.0)
+    plan.inputs[k_brake:, Input.fxf] = fxf
+    plan.inputs[k_brake:, Input.fxr] = fxr
+    return plan
+
+
+def test_torque_preview_commands_the_force_one_torque_time_constant_ahead():
+    # The truck's torques lag by 0.15 s = 1.5 planning stages; braking planned from stage 2
+    # (t = 0.2 s) is commanded from t = 0.05 s on, and not before.
+    assert TRUCK.torque_time_constant_s == 0.15
+    plan = _brake_from_stage(2)
+    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
+    ahead = TrackingController(TRUCK)
+    now = TrackingController(TRUCK, gains=ControllerGains(torque_preview=False))
+    r = TRUCK.wheel_radius_m
+    before = ahead.command(0.049, x, 0.0, plan, 0.0)
+    at = ahead.command(0.051, x, 0.0, plan, 0.0)
+    assert before.torque_front_nm == 0.0 and before.torque_rear_nm == 0.0
+    assert np.isclose(at.torque_front_nm, -2e4 * r) and np.isclose(at.torque_rear_nm, -1e4 * r)
+    # Without the preview the same braking starts at the stage's own time.
+    assert now.command(0.19, x, 0.0, plan, 0.0).torque_front_nm == 0.0
+    assert np.isclose(now.command(0.2, x, 0.0, plan, 0.0).torque_front_nm, -2e4 * r)
+    # At the plan's end the preview holds the last stage.
+    end = ahead.command(3.99, x, 0.0, plan, 0.0)
+    assert np.isclose(end.torque_rear_nm, -1e4 * r)
+
+
+def test_torque_preview_lets_the_lagging_brake_deliver_a_planned_ramp_on_time():
+    # A planned brake ramp (-20 kN/s, held per 0.1 s stage, so the stages trail the ramp by half
+    # a stage: 1 kN) through the plant's first-order torque lag: commanded as planned, the
+    # realised force trails the ramp by (τ + 0.05 s) × 20 kN/s = 4 kN; previewed by τ, by the
+    # half stage only.
+    tau, dt = TRUCK.torque_time_constant_s, 0.001
+    plan = _plan(0.0, 0.0, 0.0)
+    ramp = -2e4 * 0.1 * np.arange(plan.inputs.shape[0])
+    plan.inputs[:, Input.fxf] = ramp
+    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
+    errors = {}
+    for preview in (False, True):
+        ctrl = TrackingController(TRUCK, gains=ControllerGains(torque_preview=preview))
+        torque, err = 0.0, []
+        for i in range(3000):
+            t = i * dt
+            cmd = ctrl.command(t, x, 0.0, plan, 0.0).torque_front_nm
+            torque += dt * (cmd - torque) / tau
+            if t >= 1.0:  # past the start-up transient
+                err.append(abs(torque / TRUCK.wheel_radius_m - (-2e4 * t)))
+        errors[preview] = np.mean(err), np.max(err)
+    assert 3.5e3 < errors[False][0] < 4.5e3
+    assert errors[True][0] < 1.2e3 and errors[True][1] < 1.5e3

@@ -4,7 +4,8 @@ Steering = inverse Magic-Formula of the planned front lateral force at the plann
 friction estimate (with the tire the planner assumes: the vehicle's own, or with
 ``PlannerConfig.stiffness = "from_mu_hat"`` the set of its ``stiffness_table`` at μ̂), plus
 the small-angle slip kinematics ``δ = α_f + (v_y + l_f ψ̇)/v_x``, plus feedback on lateral and
-heading error. Wheel torques = planned longitudinal forces × wheel radius, plus speed feedback.
+heading error. Wheel torques = planned longitudinal forces × wheel radius, plus speed feedback;
+the forces are read one torque time constant ahead in the plan (``ControllerGains.torque_preview``).
 The command is rate-limited and clipped to the actuators' ranges.
 """
 
@@ -33,6 +34,12 @@ class ControllerGains:
     steer_preview_s: float = 0.2
     speed_1_per_s: float = 0.8
     rate_hz: float = 50.0
+    torque_preview: bool = True
+    """Command the longitudinal forces the plan asks for one wheel-torque time constant
+    (``VehicleParams.torque_time_constant_s``) ahead: the torque actuators are first-order lags,
+    which follow a ramp that far behind, so the realised force then follows the plan's instead of
+    arriving 0.15 s (truck) late at every brake application. ``False``: the force planned for
+    now, as in the paper's controller."""
 
 
 def _magic_formula_lateral(alpha: np.ndarray, fz: float, mu: float, tire: TireParams):
@@ -164,6 +171,9 @@ class TrackingController:
         self._last_steer_cmd_rad = delta
 
         extra_force = par.mass_kg * g.speed_1_per_s * (x_ref[State.vx] - vx)
+        if g.torque_preview:
+            tau_t = min(tau + par.torque_time_constant_s / plan.dt_s, n - 1e-9)
+            u = plan.inputs[int(tau_t)].tolist()
         fxf, fxr = float(u[Input.fxf]), float(u[Input.fxr])
         if extra_force >= 0.0:
             fxr += extra_force

@@ -19,6 +19,7 @@ from threadpoolctl import ThreadpoolController
 from mufusion.configurations import Configuration, make_configuration
 from mufusion.estimators import class_table, local_timing
 from mufusion.planner import (
+    ControllerGains,
     PlannerConfig,
     PlannerObstacle,
     TrackingController,
@@ -111,7 +112,9 @@ def run_scenario(
     world = World(road=road, to_planner_obstacle=_planner_obstacle)
     rates = cfg.rates()
     planner = planner_for(cfg)
-    controller = TrackingController(params, planner.config)
+    controller = TrackingController(
+        params, planner.config, ControllerGains(torque_preview=cfg.sim.torque_preview)
+    )
     rng = np.random.default_rng(cfg.seed)
     friction = make_configuration(
         configuration,
