@@ -177,6 +177,12 @@ def test_probing_is_logged_bounded_and_makes_the_local_estimate_available(cautio
     assert v0 - float(probing["speed_mps"].min()) <= 2.0
     steps = log.planning_steps
     assert steps[steps["t_s"] <= float(end["t_s"].iloc[0]) + 0.1]["local_available"].any()
-    # Without probing the local estimator never measures before the curve.
+    # Without probing the local estimator measures only once the braking for the curve brings
+    # the rear tires to its threshold (0.9-1.0 s in; 0.3 s with the probe). The instant itself
+    # moves with any change of the braking, so the test compares the two runs.
+    def first_available_s(planning_steps) -> float:
+        available = planning_steps[planning_steps["local_available"].astype(bool)]
+        return float(available["t_s"].min()) if len(available) else float("inf")
+
     quiet = caution_runs["neither"].planning_steps
-    assert not quiet[quiet["t_s"] < 1.0]["local_available"].any()
+    assert first_available_s(steps) + 0.3 <= first_available_s(quiet)

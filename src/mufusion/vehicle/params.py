@@ -69,8 +69,9 @@ class VehicleParams:
     max_brake_torque_front_nm: float
     max_brake_torque_rear_nm: float
     tire: TireParams
-    # Actuator lags of the plant (the planner ignores them): first-order steering servo (also
-    # rate-limited by ``max_steer_rate_radps``) and first-order wheel-torque build-up.
+    # Actuator lags of the plant: first-order steering servo (also rate-limited by
+    # ``max_steer_rate_radps``) and first-order wheel-torque build-up. The planner's model has
+    # neither; the controller previews the plan by them (planner/controller.py).
     steer_time_constant_s: float = 0.05
     torque_time_constant_s: float = 0.1
     source: str = field(default="", compare=False)

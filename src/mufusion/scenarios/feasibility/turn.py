@@ -9,8 +9,9 @@ the acceleration ``λ μ(s) g`` in any direction (λ: the planner's utilisation 
 speed is bounded by ``v² κ(s) ≤ λ μ(s) g`` and, before a tighter point, by braking with what the
 lateral demand leaves: ``a_x = √((λμg)² − (v²κ)²)``.
 A backward pass from the curve's end gives the highest speed ``v_max(s)`` from which every later
-limit can still be met; a first-order actuator lag τ is a dead time τ at the entry speed before
-braking starts (its exact response brakes ``a τ²/2`` more: the dead time is conservative).
+limit can still be met (each step braking with what the lateral demand at its faster end
+leaves); a first-order actuator lag τ is a dead time τ at the entry speed before braking starts
+(its exact response brakes ``a τ²/2`` more: the dead time is conservative).
 Derivation and figures: ``docs/feasibility.md``.
 """
 
@@ -180,11 +181,29 @@ def _profile(
     u[-1] = limit[-1]
     for i in range(len(nodes) - 2, -1, -1):
         a_total = lam * mu_step[i] * GRAVITY_MPS2
-        k = step_k[i]
-        lateral = u[i + 1] * k if k > 0.0 else 0.0
-        a_x = min(math.sqrt(max(a_total * a_total - lateral * lateral, 0.0)), max_decel_mps2)
-        u[i] = min(limit[i], u[i + 1] + 2.0 * a_x * (nodes[i + 1] - nodes[i]))
+        u[i] = min(limit[i], _braking_step(u[i + 1], a_total, step_k[i],
+                                           nodes[i + 1] - nodes[i], max_decel_mps2))
     return s, np.asarray(u), np.asarray(limit)
+
+
+def _braking_step(u_end: float, a_total: float, kappa: float, ds: float,
+                  max_decel_mps2: float) -> float:
+    """v² at a step's start from ``u_end`` = v² at its end, braking with what the lateral demand
+    at the start (the faster end) leaves: ``w = u_end + 2 ds √(a² − (w κ)²)``.
+
+    Implicit in ``w``: the explicit form (the lateral demand at the slower end) is not monotone
+    in ``u_end`` near the limit, so more friction further on could lower v_max by ~1e-5 m/s;
+    this one is (``w`` rises with ``u_end``) and errs slow.
+    """
+    if kappa <= 0.0:
+        return u_end + 2.0 * min(a_total, max_decel_mps2) * ds
+    if u_end * kappa >= a_total:
+        return u_end  # no braking left at the end's lateral demand
+    # (w − u)² = 4 ds² (a² − w² κ²), root w ≥ u.
+    c = (2.0 * ds * kappa) ** 2
+    disc = 4.0 * ds * ds * (a_total * a_total * (1.0 + c) - (kappa * u_end) ** 2)
+    w = (u_end + math.sqrt(disc)) / (1.0 + c)
+    return min(w, u_end + 2.0 * max_decel_mps2 * ds)
 
 
 def _assess(
