@@ -1,7 +1,7 @@
 """Closed-loop speed: real-time factor of the paper scenarios and where the time goes.
 
 Run: ``python benchmarks/closed_loop.py [--repeat N] [--breakdown-runs M] [--configuration F]
-[--blas-threads K]``.
+[--blas-threads K] [--method product|paper]``.
 For each paper scenario (``turn``: 12 s simulated, ``popup``: 6 s) one untimed run
 compiles/loads the solver, then ``N`` timed runs give the real-time factor (simulated s / wall s
 of ``run_scenario``, median and best) and the same against the process's CPU time, which other
@@ -10,7 +10,10 @@ jobs on a shared machine disturb far less than the wall clock (best: the least d
 (``time.process_time``) give the breakdown by stage of the fastest of them (exclusive time: a
 world call made from inside the planner counts for the world, not twice). The wrappers add about
 a microsecond per call, so that run's own factor is printed too.
-``--blas-threads 1`` limits the BLAS thread pools to one thread (the fusion's small matrix
+``--method paper`` runs the scenarios with the paper's method, as the reproduction does
+(``mufusion.reproduction.variants.PAPER_METHOD``: no probing, lane recovery, curve speed
+reference, stop-first, front-force rate or torque preview); the default is the product's
+defaults. ``--blas-threads 1`` limits the BLAS thread pools to one thread (the fusion's small matrix
 products gain nothing from threads on a busy 2-core machine). Numbers go to docs/performance.md,
 section "## Closed loop".
 """
@@ -32,6 +35,7 @@ from threadpoolctl import threadpool_limits
 from mufusion.configurations import FrictionConfiguration
 from mufusion.planner import TrackingController, TractionAdaptivePlanner
 from mufusion.planner.acados_backend import AcadosBackend
+from mufusion.reproduction.variants import PAPER_METHOD
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
 from mufusion.sim.log import RunLog
@@ -41,6 +45,8 @@ from mufusion.sim.world import World
 from mufusion.vehicle.plant import Plant
 
 SCENARIOS = ("turn", "popup")
+METHODS = {"product": (), "paper": PAPER_METHOD}
+"""Scenario overrides per ``--method``: the product's defaults, or the paper's method."""
 # The planner's time is split into its own Python, the acados backend's Python (writing the
 # problem, reading the plan) and the acados solve itself (C).
 STAGES = ("plant", "planner", "acados backend", "acados solve (C)", "controller",
@@ -139,8 +145,9 @@ def _simulated_s(log: RunLog) -> float:
     return float(log.timeseries["t_s"].iloc[-1])
 
 
-def measure(name: str, configuration: str, repeat: int, breakdown_runs: int = 1) -> dict[str, Any]:
-    cfg = load_scenario(name)
+def measure(name: str, configuration: str, repeat: int, breakdown_runs: int = 1,
+            method: str = "product") -> dict[str, Any]:
+    cfg = load_scenario(name, list(METHODS[method]))
     run_scenario(cfg, configuration)  # solver generated/compiled/loaded, caches warm
     wall_factors: list[float] = []
     cpu_factors: list[float] = []
@@ -163,6 +170,7 @@ def measure(name: str, configuration: str, repeat: int, breakdown_runs: int = 1)
     return {
         "scenario": name,
         "configuration": configuration,
+        "method": method,
         "simulated_s": _simulated_s(log),
         "realtime_factor_median": statistics.median(wall_factors),
         "realtime_factor_best": max(wall_factors),
@@ -183,6 +191,8 @@ def main() -> None:
     parser.add_argument("--configuration", default="F", help="friction configuration")
     parser.add_argument("--blas-threads", type=int, default=None,
                         help="limit BLAS/OpenMP thread pools to this many threads (≥ 1)")
+    parser.add_argument("--method", choices=sorted(METHODS), default="product",
+                        help="the product's defaults or the paper's method (as reproduced)")
     args = parser.parse_args()
     if args.repeat < 1:
         raise ValueError(f"--repeat must be >= 1, got {args.repeat}")
@@ -192,10 +202,12 @@ def main() -> None:
         raise ValueError(f"--blas-threads must be >= 1, got {args.blas_threads}")
     for name in SCENARIOS:
         with threadpool_limits(limits=args.blas_threads):
-            result = measure(name, args.configuration, args.repeat, args.breakdown_runs)
+            result = measure(name, args.configuration, args.repeat, args.breakdown_runs,
+                             args.method)
         result["blas_threads"] = args.blas_threads
         cpu_ms = 1e3 * result["instrumented_cpu_s"]
-        print(f"{name} ({args.configuration}, {result['simulated_s']:.1f} s simulated): "
+        print(f"{name} ({args.configuration}, {args.method}, "
+              f"{result['simulated_s']:.1f} s simulated): "
               f"real-time factor {result['realtime_factor_median']:.1f}x median, "
               f"{result['realtime_factor_best']:.1f}x best of {args.repeat} (wall clock); "
               f"{result['cpu_realtime_factor_median']:.1f}x median, "
