@@ -142,3 +142,14 @@ def test_torque_preview_lets_the_lagging_brake_deliver_a_planned_ramp_on_time():
         errors[preview] = np.mean(err), np.max(err)
     assert 3.5e3 < errors[False][0] < 4.5e3
     assert errors[True][0] < 1.2e3 and errors[True][1] < 1.5e3
+
+
+def test_a_non_finite_force_ahead_degrades_like_one_now():
+    # The previewed stage is checked as the current one is: NaN there holds the wheel and
+    # brakes gently instead of passing NaN torques to the actuators.
+    plan = _brake_from_stage(2, fxf=float("nan"))
+    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
+    cmd = TrackingController(TRUCK).command(0.06, x, 0.01, plan, 0.0)
+    assert cmd.steer_rad == 0.01
+    assert np.isfinite(cmd.torque_front_nm) and cmd.torque_front_nm < 0.0
+    assert np.isfinite(cmd.torque_rear_nm) and cmd.torque_rear_nm < 0.0

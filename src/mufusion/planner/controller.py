@@ -135,8 +135,11 @@ class TrackingController:
         k = int(tau)
         x_ref = _interpolate(plan.states, k, tau - k)
         u = plan.inputs[k].tolist()
+        # The longitudinal forces are read ahead by the torque lag (see ControllerGains).
+        u_long = (plan.inputs[int(min(tau + par.torque_time_constant_s / plan.dt_s, n - 1e-9))]
+                  .tolist() if g.torque_preview else u)
         if not (all(map(math.isfinite, x)) and all(map(math.isfinite, x_ref))
-                and all(map(math.isfinite, u))):
+                and all(map(math.isfinite, u)) and all(map(math.isfinite, u_long))):
             # Degrade, never raise: hold the wheel and brake gently.
             brake = -0.1 * par.mass_kg * 9.81 * par.wheel_radius_m
             return ActuatorCommand(float(steer_rad_now), 0.5 * brake, 0.5 * brake).clipped(par)
@@ -171,10 +174,7 @@ class TrackingController:
         self._last_steer_cmd_rad = delta
 
         extra_force = par.mass_kg * g.speed_1_per_s * (x_ref[State.vx] - vx)
-        if g.torque_preview:
-            tau_t = min(tau + par.torque_time_constant_s / plan.dt_s, n - 1e-9)
-            u = plan.inputs[int(tau_t)].tolist()
-        fxf, fxr = float(u[Input.fxf]), float(u[Input.fxr])
+        fxf, fxr = float(u_long[Input.fxf]), float(u_long[Input.fxr])
         if extra_force >= 0.0:
             fxr += extra_force
         else:
