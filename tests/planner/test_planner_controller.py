@@ -98,14 +98,14 @@ def _brake_from_stage(k_brake: int, fxf: float = -2e4, fxr: float = -1e4) -> Pla
     return plan
 
 
-def test_torque_preview_commands_the_force_one_torque_time_constant_ahead():
+def test_torque_compensation_commands_the_force_one_torque_time_constant_ahead():
     # The truck's torques lag by 0.15 s = 1.5 planning stages; braking planned from stage 2
     # (t = 0.2 s) is commanded from t = 0.05 s on, and not before.
     assert TRUCK.torque_time_constant_s == 0.15
     plan = _brake_from_stage(2)
     x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
     ahead = TrackingController(TRUCK)
-    now = TrackingController(TRUCK, gains=ControllerGains(torque_preview=False))
+    now = TrackingController(TRUCK, gains=ControllerGains(torque_compensation=False))
     r = TRUCK.wheel_radius_m
     before = ahead.command(0.049, x, 0.0, plan, 0.0)
     at = ahead.command(0.051, x, 0.0, plan, 0.0)
@@ -119,29 +119,57 @@ def test_torque_preview_commands_the_force_one_torque_time_constant_ahead():
     assert np.isclose(end.torque_rear_nm, -1e4 * r)
 
 
-def test_torque_preview_lets_the_lagging_brake_deliver_a_planned_ramp_on_time():
+def _through_the_lag(ctrl: TrackingController, plan: Plan, feedback: bool, t_end_s: float = 3.0):
+    """The front torque [N m] of the plant's first-order lag (1 ms steps) under the controller at
+    its 50 Hz, each command held for its period; with ``feedback`` the controller is given the
+    measured torques."""
+    tau, dt = TRUCK.torque_time_constant_s, 0.001
+    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
+    torque, cmd, out = 0.0, 0.0, []
+    for i in range(round(t_end_s / dt)):
+        t = i * dt
+        if i % 20 == 0:
+            measured = (torque, 0.0) if feedback else None
+            cmd = ctrl.command(t, x, 0.0, plan, 0.0, measured).torque_front_nm
+        torque += dt * (cmd - torque) / tau
+        out.append((t + dt, torque))
+    return np.array(out)
+
+
+def test_torque_compensation_lets_the_lagging_brake_deliver_a_planned_ramp_on_time():
     # A planned brake ramp (-20 kN/s, held per 0.1 s stage, so the stages trail the ramp by half
     # a stage: 1 kN) through the plant's first-order torque lag: commanded as planned, the
-    # realised force trails the ramp by (τ + 0.05 s) × 20 kN/s = 4 kN; previewed by τ, by the
-    # half stage only.
-    tau, dt = TRUCK.torque_time_constant_s, 0.001
+    # realised force trails the ramp by (τ + 0.05 s) × 20 kN/s = 4 kN; fed forward by τ, by the
+    # half stage only; the feedback on the measured torque keeps it there.
     plan = _plan(0.0, 0.0, 0.0)
-    ramp = -2e4 * 0.1 * np.arange(plan.inputs.shape[0])
-    plan.inputs[:, Input.fxf] = ramp
-    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
+    plan.inputs[:, Input.fxf] = -2e4 * 0.1 * np.arange(plan.inputs.shape[0])
     errors = {}
-    for preview in (False, True):
-        ctrl = TrackingController(TRUCK, gains=ControllerGains(torque_preview=preview))
-        torque, err = 0.0, []
-        for i in range(3000):
-            t = i * dt
-            cmd = ctrl.command(t, x, 0.0, plan, 0.0).torque_front_nm
-            torque += dt * (cmd - torque) / tau
-            if t >= 1.0:  # past the start-up transient
-                err.append(abs(torque / TRUCK.wheel_radius_m - (-2e4 * t)))
-        errors[preview] = np.mean(err), np.max(err)
-    assert 3.5e3 < errors[False][0] < 4.5e3
-    assert errors[True][0] < 1.2e3 and errors[True][1] < 1.5e3
+    for name, gains, feedback in (("none", ControllerGains(torque_compensation=False), False),
+                                  ("feed-forward", ControllerGains(), False),
+                                  ("both", ControllerGains(), True)):
+        run = _through_the_lag(TrackingController(TRUCK, gains=gains), plan, feedback)
+        late = run[run[:, 0] >= 1.0]  # past the start-up transient
+        err = np.abs(late[:, 1] / TRUCK.wheel_radius_m - (-2e4 * late[:, 0]))
+        errors[name] = err.mean(), err.max()
+    assert 3.5e3 < errors["none"][0] < 4.5e3
+    assert errors["feed-forward"][0] < 1.2e3 and errors["feed-forward"][1] < 1.5e3
+    assert errors["both"][0] < 1.2e3 and errors["both"][1] < 2.5e3
+
+
+def test_torque_feedback_closes_a_new_plans_first_stage_in_one_controller_period():
+    # A new plan brakes from its first stage (2 kN front, within the actuator's range even at
+    # the feedback's gain of 7): no feed-forward can have anticipated it. Fed forward only, the
+    # lag has built 1 - exp(-0.02/0.15) = 12.5 % of it after one controller period; with the
+    # measured torque fed back, all of it (to the plant's 1 ms integration).
+    plan = _brake_from_stage(0, fxf=-2e3, fxr=0.0)
+    target = -2e3 * TRUCK.wheel_radius_m
+    ff = _through_the_lag(TrackingController(TRUCK), plan, False, 0.02)
+    fb = _through_the_lag(TrackingController(TRUCK), plan, True, 0.02)
+    assert np.isclose(ff[-1, 1] / target, 1.0 - np.exp(-0.02 / 0.15), atol=0.01)
+    assert np.isclose(fb[-1, 1] / target, 1.0, atol=0.01)
+    # Then it holds the plan's torque (the feedback term vanishes there).
+    held = _through_the_lag(TrackingController(TRUCK), plan, True, 0.5)
+    assert np.allclose(held[held[:, 0] >= 0.02, 1], target, rtol=0.01)
 
 
 def test_a_non_finite_force_ahead_degrades_like_one_now():

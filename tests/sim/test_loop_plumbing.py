@@ -45,7 +45,7 @@ class _Controller:
         self.steer_rad = steer_rad
         self.times: list[float] = []
 
-    def command(self, t_s, x_frenet, steer_rad_now, plan, curvature):
+    def command(self, t_s, x_frenet, steer_rad_now, plan, curvature, torques_now_nm=None):
         self.times.append(t_s)
         return ActuatorCommand(self.steer_rad, 0.0, 0.0)
 

@@ -78,7 +78,7 @@ def _events(speed_mps: float) -> list[str]:
     from mufusion.vehicle.plant import Plant, initial_state
 
     class _Controller:
-        def command(self, t_s, x_frenet, steer_rad_now, plan, curvature):
+        def command(self, t_s, x_frenet, steer_rad_now, plan, curvature, torques_now_nm=None):
             return ActuatorCommand(0.0, -2000.0, -2000.0)
 
     class _Friction:

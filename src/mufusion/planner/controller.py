@@ -4,8 +4,10 @@ Steering = inverse Magic-Formula of the planned front lateral force at the plann
 friction estimate (with the tire the planner assumes: the vehicle's own, or with
 ``PlannerConfig.stiffness = "from_mu_hat"`` the set of its ``stiffness_table`` at μ̂), plus
 the small-angle slip kinematics ``δ = α_f + (v_y + l_f ψ̇)/v_x``, plus feedback on lateral and
-heading error. Wheel torques = planned longitudinal forces × wheel radius, plus speed feedback;
-the forces are read one torque time constant ahead in the plan (``ControllerGains.torque_preview``).
+heading error. Wheel torques = planned longitudinal forces × wheel radius, plus speed feedback,
+compensating the torques' first-order lag (``ControllerGains.torque_compensation``): the forces are
+read one torque time constant ahead in the plan, and the measured torque's shortfall against the
+plan of now is removed within one controller period.
 The command is rate-limited and clipped to the actuators' ranges.
 """
 
@@ -34,12 +36,14 @@ class ControllerGains:
     steer_preview_s: float = 0.2
     speed_1_per_s: float = 0.8
     rate_hz: float = 50.0
-    torque_preview: bool = True
-    """Command the longitudinal forces the plan asks for one wheel-torque time constant
-    (``VehicleParams.torque_time_constant_s``) ahead: the torque actuators are first-order lags,
-    which follow a ramp that far behind, so the realised force then follows the plan's instead of
-    arriving 0.15 s (truck) late at every brake application. ``False``: the force planned for
-    now, as in the paper's controller."""
+    torque_compensation: bool = True
+    """Compensate the wheel torques' first-order lag τ (``VehicleParams.torque_time_constant_s``,
+    0.15 s for the truck), which otherwise delivers every planned brake application late.
+    Feed-forward: the longitudinal forces the plan asks for τ ahead (a first-order lag follows a
+    ramp τ behind). Feedback, given the measured torques: their shortfall against the plan of now
+    (a new plan's first stage, which no feed-forward could anticipate), removed within one
+    controller period (dead-beat for the lag: gain ``e/(1 − e)``, ``e = exp(−h/τ)``).
+    ``False``: the forces planned for now, as in the paper's controller."""
 
 
 def _magic_formula_lateral(alpha: np.ndarray, fz: float, mu: float, tire: TireParams):
@@ -123,8 +127,12 @@ class TrackingController:
         steer_rad_now: float,
         plan: Plan,
         curvature_1pm_now: float = 0.0,
+        torques_now_nm: tuple[float, float] | None = None,
     ) -> ActuatorCommand:
-        """Actuator command at time ``t_s`` [s] for the Frenet state ``x_frenet`` (6,)."""
+        """Actuator command at time ``t_s`` [s] for the Frenet state ``x_frenet`` (6,).
+
+        ``torques_now_nm``: the measured (front, rear) wheel torques [N m] for the torque lag's
+        feedback (``None``: feed-forward only)."""
         par, g = self.params, self.gains
         # Plain floats from here on (the same IEEE arithmetic as numpy's, element by element,
         # without its per-operation overhead at the controller's rate).
@@ -137,7 +145,7 @@ class TrackingController:
         u = plan.inputs[k].tolist()
         # The longitudinal forces are read ahead by the torque lag (see ControllerGains).
         u_long = (plan.inputs[int(min(tau + par.torque_time_constant_s / plan.dt_s, n - 1e-9))]
-                  .tolist() if g.torque_preview else u)
+                  .tolist() if g.torque_compensation else u)
         if not (all(map(math.isfinite, x)) and all(map(math.isfinite, x_ref))
                 and all(map(math.isfinite, u)) and all(map(math.isfinite, u_long))):
             # Degrade, never raise: hold the wheel and brake gently.
@@ -174,12 +182,27 @@ class TrackingController:
         self._last_steer_cmd_rad = delta
 
         extra_force = par.mass_kg * g.speed_1_per_s * (x_ref[State.vx] - vx)
-        fxf, fxr = float(u_long[Input.fxf]), float(u_long[Input.fxr])
         if extra_force >= 0.0:
-            fxr += extra_force
+            extra_f, extra_r = 0.0, extra_force
         else:
             share_front = par.cog_to_rear_axle_m / par.wheelbase_m
-            fxf += share_front * extra_force
-            fxr += (1.0 - share_front) * extra_force
+            extra_f, extra_r = share_front * extra_force, (1.0 - share_front) * extra_force
         r = par.wheel_radius_m
-        return ActuatorCommand(delta, fxf * r, fxr * r).clipped(par)
+        torque_f = (float(u_long[Input.fxf]) + extra_f) * r
+        torque_r = (float(u_long[Input.fxr]) + extra_r) * r
+        if g.torque_compensation and torques_now_nm is not None:
+            gain = _dead_beat_gain(1.0 / g.rate_hz, par.torque_time_constant_s)
+            torque_f += gain * ((float(u[Input.fxf]) + extra_f) * r - torques_now_nm[0])
+            torque_r += gain * ((float(u[Input.fxr]) + extra_r) * r - torques_now_nm[1])
+        return ActuatorCommand(delta, torque_f, torque_r).clipped(par)
+
+
+def _dead_beat_gain(period_s: float, tau_s: float) -> float:
+    """Feedback gain that closes a first-order lag's error in one period of held command.
+
+    Over ``period_s`` the lag moves ``T`` to ``u + (T − u) e`` with ``e = exp(−period/τ)``; the
+    command ``T* + K (T* − T)`` lands on ``T*`` for ``K = e / (1 − e)`` (6.99 for the truck at
+    50 Hz).
+    """
+    e = math.exp(-period_s / tau_s)
+    return e / (1.0 - e)

@@ -168,10 +168,11 @@ class SimSettings(_Strict):
     """The plant's tires: ``default`` (stiffness independent of μ, only the peak scales) or the
     authors' surface-dependent Magic Formula sets per μ under each axle, by interval
     (``authors``) or interpolated (``authors_interpolated``); docs/estimators.md."""
-    torque_preview: bool = True
-    """The controller commands the wheel forces the plan asks for one torque time constant
-    ahead, so the lagging brakes deliver them on time (:class:`mufusion.planner.controller.
-    ControllerGains`); ``false``: the forces planned for now, as in the paper's controller."""
+    torque_compensation: bool = True
+    """The controller compensates the wheel torques' lag: the forces the plan asks for one
+    torque time constant ahead, plus feedback on the measured torques, so the lagging brakes
+    deliver the plan's forces on time (:class:`mufusion.planner.controller.ControllerGains`);
+    ``false``: the forces planned for now, as in the paper's controller."""
 
     def surface_tires(self) -> SurfaceTireTable | None:
         """The plant's tire table (``None`` for the default tire)."""

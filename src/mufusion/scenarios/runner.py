@@ -113,7 +113,7 @@ def run_scenario(
     rates = cfg.rates()
     planner = planner_for(cfg)
     controller = TrackingController(
-        params, planner.config, ControllerGains(torque_preview=cfg.sim.torque_preview)
+        params, planner.config, ControllerGains(torque_compensation=cfg.sim.torque_compensation)
     )
     rng = np.random.default_rng(cfg.seed)
     friction = make_configuration(

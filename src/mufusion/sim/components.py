@@ -126,7 +126,10 @@ class Controller(Protocol):
         steer_rad_now: float,
         plan: Plan,
         curvature_1pm_now: float = 0.0,
-    ) -> ActuatorCommand: ...
+        torques_now_nm: tuple[float, float] | None = None,
+    ) -> ActuatorCommand:
+        """``torques_now_nm``: the measured (front, rear) wheel torques [N m], or ``None``."""
+        ...
 
 
 class PlantModel(Protocol):

@@ -366,7 +366,9 @@ class ClosedLoop:
         if plan is not None and not (self._minimal_risk and not self._planner_usable):
             try:
                 command = self.controller.command(
-                    t, xf, float(x_plant[PlantState.STEER]), plan, curvature
+                    t, xf, float(x_plant[PlantState.STEER]), plan, curvature,
+                    (float(x_plant[PlantState.TORQUE_FRONT]),
+                     float(x_plant[PlantState.TORQUE_REAR])),
                 ).clipped(self.params)
                 return self._probe_command(t, xf, command)
             except Exception as exc:

@@ -71,7 +71,7 @@ class VehicleParams:
     tire: TireParams
     # Actuator lags of the plant: first-order steering servo (also rate-limited by
     # ``max_steer_rate_radps``) and first-order wheel-torque build-up. The planner's model has
-    # neither; the controller previews the plan by them (planner/controller.py).
+    # neither; the controller compensates them (planner/controller.py).
     steer_time_constant_s: float = 0.05
     torque_time_constant_s: float = 0.1
     source: str = field(default="", compare=False)
