@@ -181,3 +181,13 @@ def test_a_non_finite_force_ahead_degrades_like_one_now():
     assert cmd.steer_rad == 0.01
     assert np.isfinite(cmd.torque_front_nm) and cmd.torque_front_nm < 0.0
     assert np.isfinite(cmd.torque_rear_nm) and cmd.torque_rear_nm < 0.0
+
+
+def test_a_non_finite_torque_measurement_is_not_fed_back():
+    # A broken torque sensor must not turn the command into NaN: the controller falls back to
+    # its feed-forward, the command it gives without a measurement.
+    plan = _brake_from_stage(0, fxf=-2e3, fxr=-1e3)
+    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
+    without = TrackingController(TRUCK).command(0.05, x, 0.0, plan, 0.0)
+    broken = TrackingController(TRUCK).command(0.05, x, 0.0, plan, 0.0, (float("nan"), 0.0))
+    assert broken == without and np.isfinite(broken.torque_front_nm)

@@ -106,6 +106,9 @@ class TrackingController:
         self.gains = gains or ControllerGains()
         if self.gains.rate_hz < 50.0:
             raise ValueError(f"rate_hz must be >= 50 Hz, got {self.gains.rate_hz}")
+        # Fixed by the vehicle and the rate: computed once, not at every tick.
+        self._torque_gain = _dead_beat_gain(1.0 / self.gains.rate_hz,
+                                            params.torque_time_constant_s)
         self._last_steer_cmd_rad: float | None = None
 
     def _assumed_tire(self, mu_hat: float) -> TireParams:
@@ -132,7 +135,7 @@ class TrackingController:
         """Actuator command at time ``t_s`` [s] for the Frenet state ``x_frenet`` (6,).
 
         ``torques_now_nm``: the measured (front, rear) wheel torques [N m] for the torque lag's
-        feedback (``None``: feed-forward only)."""
+        feedback (``None`` or not finite: feed-forward only)."""
         par, g = self.params, self.gains
         # Plain floats from here on (the same IEEE arithmetic as numpy's, element by element,
         # without its per-operation overhead at the controller's rate).
@@ -190,8 +193,10 @@ class TrackingController:
         r = par.wheel_radius_m
         torque_f = (float(u_long[Input.fxf]) + extra_f) * r
         torque_r = (float(u_long[Input.fxr]) + extra_r) * r
-        if g.torque_compensation and torques_now_nm is not None:
-            gain = _dead_beat_gain(1.0 / g.rate_hz, par.torque_time_constant_s)
+        # A measurement that is not finite is not fed back (feed-forward only).
+        if (g.torque_compensation and torques_now_nm is not None
+                and all(map(math.isfinite, torques_now_nm))):
+            gain = self._torque_gain
             torque_f += gain * ((float(u[Input.fxf]) + extra_f) * r - torques_now_nm[0])
             torque_r += gain * ((float(u[Input.fxr]) + extra_r) * r - torques_now_nm[1])
         return ActuatorCommand(delta, torque_f, torque_r).clipped(par)
