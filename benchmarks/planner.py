@@ -88,8 +88,9 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
     x = model.set_variable("_x", "x", shape=(6, 1))
     u = model.set_variable("_u", "u", shape=(3, 1))
     tvp = {name: model.set_variable("_tvp", name) for name in
-           ("kappa", "c_r", "r_f", "r_r", "d_lo", "d_hi")}
-    p = ca.vertcat(tvp["kappa"], tvp["c_r"], tvp["r_f"], tvp["r_r"])
+           ("kappa", "c_r", "r_f", "r_r", "lam_mu", "d_lo", "d_hi")}
+    # In Param's order.
+    p = ca.vertcat(tvp["kappa"], tvp["c_r"], tvp["r_f"], tvp["r_r"], tvp["lam_mu"])
 
     def f(xx):
         return frenet_bicycle_dynamics(xx, u, tvp["kappa"], tvp["c_r"], TRUCK)
@@ -99,7 +100,7 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
     k3 = f(x + 0.5 * dt * k2)
     k4 = f(x + dt * k3)
     model.set_rhs("x", x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4))
-    h = constraint_expressions(x, u, p, TRUCK, config.polygon_sides)
+    h = constraint_expressions(x, u, p, TRUCK, config.polygon_sides, config.load_transfer)
     model.set_expression("h_front", h[: config.polygon_sides])
     model.set_expression("h_rear", h[config.polygon_sides:])
     model.setup()
@@ -144,6 +145,7 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
             template["_tvp", k, "c_r"] = stage["p"][kk, Param.rear_stiffness]
             template["_tvp", k, "r_f"] = stage["p"][kk, Param.radius_front]
             template["_tvp", k, "r_r"] = stage["p"][kk, Param.radius_rear]
+            template["_tvp", k, "lam_mu"] = stage["p"][kk, Param.utilized_friction]
             template["_tvp", k, "d_lo"] = lo[kk]
             template["_tvp", k, "d_hi"] = hi[kk]
         return template

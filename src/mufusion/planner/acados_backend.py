@@ -67,6 +67,7 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "sides": config.polygon_sides,
             "hpipm_mode": hpipm_mode,
             "steering_rate_limit": config.steering_rate_limit,
+            "load_transfer": config.load_transfer,
             "utilization": config.utilization_factor,
         },
         sort_keys=True,
@@ -292,7 +293,8 @@ def _describe(
         f = ca.vertcat(f, u[Input.fyf])
     model.f_expl_expr = f
     model.f_impl_expr = model.xdot - f
-    model.con_h_expr = constraint_expressions(x[:N_STATES], forces, p, params, ns)
+    model.con_h_expr = constraint_expressions(x[:N_STATES], forces, p, params, ns,
+                                             config.load_transfer)
     ocp.model = model
     ocp.dims.N = n
     ocp.parameter_values = np.ones(N_PARAMS)

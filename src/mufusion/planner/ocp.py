@@ -49,6 +49,10 @@ class Param(IntEnum):
     rear_stiffness = 1
     radius_front = 2
     radius_rear = 3
+    # λ μ̂: with ``PlannerConfig.load_transfer`` the polygons' radii are this times the axle
+    # loads of the plan's own longitudinal forces; the radii above (at the guess's loads) then
+    # only scale the rows.
+    utilized_friction = 4
 
 
 N_PARAMS = len(Param)
@@ -161,6 +165,9 @@ class PlannerConfig:
     # Plan the front lateral force as a state whose rate the steering's rate limit bounds
     # (planner/front_force.py; beyond the paper, whose forces are free inputs).
     steering_rate_limit: bool = True
+    # The friction polygons' radii follow the axle loads of the plan's own longitudinal forces
+    # (pitch load transfer inside the OCP) instead of the guess's (beyond the paper).
+    load_transfer: bool = True
 
     def __post_init__(self) -> None:
         if self.stiffness not in STIFFNESS_MODELS:
@@ -202,6 +209,10 @@ class PlannerConfig:
 # :mod:`mufusion.planner.safeguards` for non-finite ones).
 MU_MIN = 0.05
 MU_MAX = 2.0
+
+
+MIN_LOAD_SHARE = 0.05
+"""Floor of an axle's normal load in the polygons, as a share of the weight."""
 
 
 def longitudinal_force_bounds_n(params: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
@@ -247,8 +258,8 @@ def stage_parameters(
     s_k = guess_states[:-1, State.s]
     ax = (guess_inputs[:, Input.fxf] + guess_inputs[:, Input.fxr]) / params.mass_kg
     fzf, fzr = normal_loads_n(ax, params)
-    fzf = np.maximum(fzf, 0.05 * params.mass_kg * 9.81)
-    fzr = np.maximum(fzr, 0.05 * params.mass_kg * 9.81)
+    fzf = np.maximum(fzf, MIN_LOAD_SHARE * params.mass_kg * 9.81)
+    fzr = np.maximum(fzr, MIN_LOAD_SHARE * params.mass_kg * 9.81)
     # np.minimum(np.maximum(...)): np.clip's values (non-zero bounds) at less overhead.
     mu = np.minimum(np.maximum(np.asarray(mu_hat_of_s(s_k), dtype=float), MU_MIN), MU_MAX)
     kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
@@ -262,10 +273,29 @@ def stage_parameters(
     p[:, Param.rear_stiffness] = c_r
     p[:, Param.radius_front] = radius_front
     p[:, Param.radius_rear] = radius_rear
+    p[:, Param.utilized_friction] = utilization_factor * mu
     return {
         "mu_hat": mu, "fzf": fzf, "fzr": fzr, "radius_front": radius_front,
         "radius_rear": radius_rear, "rear_stiffness": c_r, "curvature": kappa, "p": p,
     }
+
+
+def plan_polygon_radii_n(
+    inputs: np.ndarray, stage: dict[str, np.ndarray], params: VehicleParams, load_transfer: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """The friction polygons' radii ``(front, rear)`` [N] a plan ``inputs (N, 3)`` was solved with.
+
+    Without ``load_transfer`` these are the stage parameters (the guess's axle loads); with it,
+    ``λ μ̂`` times the loads of the plan's own longitudinal forces (:func:`constraint_expressions`).
+    """
+    if not load_transfer:
+        return stage["radius_front"], stage["radius_rear"]
+    us = np.asarray(inputs, dtype=float)
+    fzf, fzr = normal_loads_n((us[:, Input.fxf] + us[:, Input.fxr]) / params.mass_kg, params)
+    floor = MIN_LOAD_SHARE * params.mass_kg * 9.81
+    # radius / F_z of the stage parameters is λ μ̂ (the same factor front and rear).
+    friction = stage["radius_front"] / stage["fzf"]
+    return friction * np.maximum(fzf, floor), friction * np.maximum(fzr, floor)
 
 
 MAX_SWING_HEADING_RAD = 0.1
@@ -326,21 +356,40 @@ def lateral_corridor(
     return lo, hi
 
 
-def constraint_expressions(x: Any, u: Any, p: Any, params: VehicleParams, n_sides: int) -> Any:
+def constraint_expressions(
+    x: Any, u: Any, p: Any, params: VehicleParams, n_sides: int, load_transfer: bool = False
+) -> Any:
     """Friction polygons normalised by their radii, as CasADi expressions: ``h ≤ 0``.
 
     Rows: the front polygon over ``(F_xf, F_yf)`` (``n_sides`` rows, hard), then the rear polygon
-    over ``(F_xr, F_yr(x))`` (``n_sides`` rows, soft; see :func:`slack_penalties`).
+    over ``(F_xr, F_yr(x))`` (``n_sides`` rows, soft; see :func:`slack_penalties`). Without
+    ``load_transfer`` the radii are the parameters (at the guess's axle loads); with it, each
+    radius is ``λ μ̂ F_z`` at the loads of the stage's own ``F_xf + F_xr`` (linear in the forces,
+    floored at 5 % of the weight as in :func:`stage_parameters`), the rows still divided by the
+    parameter radii.
     """
     import casadi as ca
 
     normals, ratio = polygon_directions(n_sides)
     fyr = rear_lateral_force_n(x, p[Param.rear_stiffness], params)
+    if not load_transfer:
+        front = [
+            (nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front] - ratio
+            for nx, ny in normals
+        ]
+        rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] - ratio
+                for nx, ny in normals]
+        return ca.vertcat(*front, *rear)
+    floor = MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2
+    fzf, fzr = normal_loads_n((u[Input.fxf] + u[Input.fxr]) / params.mass_kg, params)
+    limit_front = ratio * p[Param.utilized_friction] * ca.fmax(fzf, floor)
+    limit_rear = ratio * p[Param.utilized_friction] * ca.fmax(fzr, floor)
     front = [
-        (nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front] - ratio
+        (nx * u[Input.fxf] + ny * u[Input.fyf] - limit_front) / p[Param.radius_front]
         for nx, ny in normals
     ]
-    rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] - ratio for nx, ny in normals]
+    rear = [(nx * u[Input.fxr] + ny * fyr - limit_rear) / p[Param.radius_rear]
+            for nx, ny in normals]
     return ca.vertcat(*front, *rear)
 
 

@@ -26,6 +26,7 @@ from mufusion.planner.ocp import (
     PlannerMode,
     PlannerObstacle,
     lateral_corridor,
+    plan_polygon_radii_n,
     stage_parameters,
     tracking_reference,
 )
@@ -321,7 +322,7 @@ class TractionAdaptivePlanner:
                     reason = FallbackReason.SOLVER_STATUS
                 else:
                     reason = check_solution(xs, us, stage, d_lo, d_hi, par, cfg.polygon_sides,
-                                            cfg.plausibility)
+                                            cfg.plausibility, cfg.load_transfer)
             except Exception as exc:  # never raise inside the loop
                 _log.warning("planner backend raised %r", exc)
                 reason = FallbackReason.EXCEPTION
@@ -339,11 +340,17 @@ class TractionAdaptivePlanner:
             xs, us = guess_x, guess_u
             self._reinitialise_backend()
         fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], par)
+        # The loads and radii the plan was solved with (its own, with load transfer).
+        limit_front, limit_rear = plan_polygon_radii_n(us, stage, par, cfg.load_transfer)
+        load_front, load_rear = stage["fzf"], stage["fzr"]
+        if cfg.load_transfer:
+            load_front = limit_front * stage["fzf"] / stage["radius_front"]
+            load_rear = limit_rear * stage["fzf"] / stage["radius_front"]
         plan = Plan(
             t0_s=float(t_s), states=xs, inputs=us, rear_lateral_force_n=np.asarray(fyr),
-            mu_hat=stage["mu_hat"], normal_load_front_n=stage["fzf"],
-            normal_load_rear_n=stage["fzr"], force_limit_front_n=stage["radius_front"],
-            force_limit_rear_n=stage["radius_rear"], status=int(status), ok=good,
+            mu_hat=stage["mu_hat"], normal_load_front_n=load_front,
+            normal_load_rear_n=load_rear, force_limit_front_n=limit_front,
+            force_limit_rear_n=limit_rear, status=int(status), ok=good,
             fallback=not good, solve_time_s=time.perf_counter() - started,
             sampled_reinit=sampled, robust_qp_retry=retried, dt_s=cfg.dt_s,
             fallback_reason=reason,

@@ -34,6 +34,7 @@ from mufusion.planner.ocp import (
     MU_MIN,
     PlausibilityLimits,
     longitudinal_force_bounds_n,
+    plan_polygon_radii_n,
     polygon_directions,
 )
 from mufusion.planner.plan import FallbackReason
@@ -141,6 +142,7 @@ def check_solution(
     params: VehicleParams,
     n_sides: int,
     limits: PlausibilityLimits,
+    load_transfer: bool = False,
 ) -> FallbackReason:
     """``FallbackReason.NONE`` if a solution may be used, else why not.
 
@@ -158,6 +160,9 @@ def check_solution(
         Friction-polygon sides.
     limits
         Tolerances.
+    load_transfer
+        Whether the polygons' radii followed the plan's own longitudinal forces
+        (``PlannerConfig.load_transfer``).
 
     Returns
     -------
@@ -168,6 +173,7 @@ def check_solution(
     if not (np.isfinite(xs).all() and np.isfinite(us).all()):
         return FallbackReason.NON_FINITE
     normals, ratio = polygon_directions(n_sides)
+    radius_front, radius_rear = plan_polygon_radii_n(us, stage, params, load_transfer)
     front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
     fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], params)
     rear = normals @ np.stack([us[:, Input.fxr], fyr])
@@ -177,10 +183,10 @@ def check_solution(
     vx, d, dpsi = xs[:, State.vx], xs[1:, State.d], xs[:, State.dpsi]
     reasons = {
         "front polygon": (
-            front > (ratio + limits.front_polygon_tolerance) * stage["radius_front"]
+            front > (ratio + limits.front_polygon_tolerance) * radius_front
         ).any(),
         "rear polygon": (
-            rear > (ratio + limits.rear_polygon_tolerance) * stage["radius_rear"]
+            rear > (ratio + limits.rear_polygon_tolerance) * radius_rear
         ).any(),
         "longitudinal force bounds": ((fx < lower - slack) | (fx > upper + slack)).any(),
         "speed": (

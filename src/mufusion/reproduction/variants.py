@@ -164,7 +164,7 @@ class Variant:
 PAPER_METHOD: tuple[str, ...] = (
     "probing.enabled=false", "lane_recovery.enabled=false", "planner.curve_speed_reference=false",
     "planner.brake_first=false", "planner.steering_rate_limit=false",
-    "sim.torque_compensation=false",
+    "sim.torque_compensation=false", "planner.load_transfer=false",
 )
 """The paper's method: a planner that tracks the cruise speed (TAMP), without our additions that
 go beyond it: friction probing and lane recovery (:mod:`mufusion.sim.supervision`), the curve-

@@ -147,6 +147,10 @@ class PlannerSettings(_Strict):
     """Plan the front lateral force as a state whose rate the steering actuator's rate limit
     bounds (:mod:`mufusion.planner.front_force`); ``false``: the forces are free inputs, as in
     the paper's planner."""
+    load_transfer: bool = True
+    """The friction polygons' radii follow the axle loads of each stage's own planned
+    longitudinal forces (pitch load transfer inside the OCP); ``false``: the loads of the
+    initial guess, as in the paper's planner."""
     brake_first: bool = True
     """Stop in front of an obstacle in the path whenever the friction the planner may use
     allows it (or no side has room), and evade only otherwise; ``false``: evade whenever an

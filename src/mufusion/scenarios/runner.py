@@ -62,6 +62,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         use_sampling=cfg.planner.use_sampling,
         curve_speed_reference=cfg.planner.curve_speed_reference,
         steering_rate_limit=cfg.planner.steering_rate_limit,
+        load_transfer=cfg.planner.load_transfer,
         lane_d_min_m=lo,
         lane_d_max_m=hi,
         safety=cfg.safety,

@@ -1,0 +1,117 @@
+"""The friction polygons at the axle loads of the plan's own longitudinal forces."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mufusion.metrics.run_metrics import compute_metrics
+from mufusion.planner.ocp import (
+    Param,
+    PlausibilityLimits,
+    constraint_expressions,
+    plan_polygon_radii_n,
+    polygon_directions,
+    stage_parameters,
+)
+from mufusion.planner.plan import FallbackReason
+from mufusion.planner.safeguards import check_solution
+from mufusion.scenarios import load_scenario
+from mufusion.scenarios.runner import run_scenario
+from mufusion.vehicle.params import GRAVITY_MPS2, TRUCK
+from mufusion.vehicle.planner_model import N_INPUTS, N_STATES, Input, State
+
+N = 10
+MU, LAMBDA = 0.8, 0.9
+
+
+def _stage(guess_fx_n: float = 0.0) -> dict[str, np.ndarray]:
+    """Stage parameters of a straight guess at 15 m/s with a total braking force ``guess_fx_n``."""
+    guess_x = np.zeros((N + 1, N_STATES))
+    guess_x[:, State.vx] = 15.0
+    guess_x[:, State.s] = 1.5 * np.arange(N + 1)
+    guess_u = np.zeros((N, N_INPUTS))
+    guess_u[:, Input.fxr] = guess_fx_n
+    return stage_parameters(guess_x, guess_u, lambda s: 0.0 * s, lambda s: MU + 0.0 * s, TRUCK,
+                            LAMBDA)
+
+
+def _loads(fx_total_n: float) -> tuple[float, float]:
+    # F_zf = m (g l_r − a_x h) / L, F_zr = m (g l_f + a_x h) / L, by hand.
+    m, h, wheelbase = TRUCK.mass_kg, TRUCK.cog_height_m, TRUCK.wheelbase_m
+    a_x = fx_total_n / m
+    return (m * (GRAVITY_MPS2 * TRUCK.cog_to_rear_axle_m - a_x * h) / wheelbase,
+            m * (GRAVITY_MPS2 * TRUCK.cog_to_front_axle_m + a_x * h) / wheelbase)
+
+
+def _rows(fxf_n: float, fxr_n: float, fyf_n: float, load_transfer: bool) -> np.ndarray:
+    import casadi as ca
+
+    x, u, p = ca.SX.sym("x", N_STATES), ca.SX.sym("u", N_INPUTS), ca.SX.sym("p", len(Param))
+    h = ca.Function("h", [x, u, p], [constraint_expressions(x, u, p, TRUCK, 12, load_transfer)])
+    state = np.zeros(N_STATES)
+    state[State.vx] = 15.0
+    forces = np.zeros(N_INPUTS)
+    forces[Input.fxf], forces[Input.fxr], forces[Input.fyf] = fxf_n, fxr_n, fyf_n
+    return np.asarray(h(state, forces, _stage()["p"][0])).ravel()
+
+
+def test_braking_moves_the_polygon_radii_with_the_load() -> None:
+    # 40 kN of braking moves m a_x h / L of load from the rear axle to the front one.
+    stage = _stage()
+    fzf, fzr = _loads(-40e3)
+    assert fzf > stage["fzf"][0] and fzr < stage["fzr"][0]
+    inputs = np.zeros((N, N_INPUTS))
+    inputs[:, Input.fxf], inputs[:, Input.fxr] = -25e3, -15e3
+    front, rear = plan_polygon_radii_n(inputs, stage, TRUCK, load_transfer=True)
+    assert front == pytest.approx(LAMBDA * MU * fzf) and rear == pytest.approx(LAMBDA * MU * fzr)
+    # Without load transfer the radii stay the guess's.
+    front, rear = plan_polygon_radii_n(inputs, stage, TRUCK, load_transfer=False)
+    assert np.all(front == stage["radius_front"]) and np.all(rear == stage["radius_rear"])
+
+
+def test_rows_bind_at_the_radius_of_the_stages_own_loads() -> None:
+    _, ratio = polygon_directions(12)
+    # Pure braking on the front axle: the row along −F_x (index 6 of 12: θ = π) binds at
+    # F_xf = ratio · λ μ̂ F_zf(a_x), F_zf growing with the braking itself.
+    fxr = -10e3
+    fzf0 = _stage()["fzf"][0]
+    # F_b = k F_zf with F_zf = F_zf0 + (F_b − fxr) h / L (k = ratio λ μ̂): linear in F_b.
+    h, wheelbase = TRUCK.cog_height_m, TRUCK.wheelbase_m
+    k = ratio * LAMBDA * MU
+    limit = k * (fzf0 - fxr * h / wheelbase) / (1.0 - k * h / wheelbase)
+    assert _rows(-limit, fxr, 0.0, True)[6] == pytest.approx(0.0, abs=1e-12)
+    assert _rows(-1.01 * limit, fxr, 0.0, True)[6] > 0.0
+    # At the guess's loads (no transfer) the same braking is beyond the front polygon.
+    assert _rows(-limit, fxr, 0.0, False)[6] > 0.05
+    # With zero longitudinal force the two formulations agree.
+    assert np.allclose(_rows(0.0, 0.0, 20e3, True), _rows(0.0, 0.0, 20e3, False), atol=1e-12)
+
+
+def test_the_solution_check_measures_a_plan_against_its_own_polygons() -> None:
+    stage = _stage()
+    states = np.zeros((N + 1, N_STATES))
+    states[:, State.vx] = 15.0
+    inputs = np.zeros((N, N_INPUTS))
+    # Front braking 8 % beyond the guess's front radius, within the radius its own load gives.
+    inputs[:, Input.fxf] = -1.08 * stage["radius_front"]
+    limits = PlausibilityLimits()
+    args = (states, inputs, stage, np.full(N, -1.0), np.full(N, 1.0), TRUCK, 12, limits)
+    assert check_solution(*args, load_transfer=True) is FallbackReason.NONE
+    assert check_solution(*args, load_transfer=False) is FallbackReason.IMPLAUSIBLE
+
+
+def test_the_truck_leaves_the_arc_in_its_lane_when_the_plans_count_their_load_transfer() -> None:
+    # 18 m/s, μ 0.9, curve 40 m ahead, right, no clothoid (feasible). At the arc's end the
+    # corridor narrows (the corners' swing at the guess's heading) and the least-violating plan
+    # brakes at once, −59 kN; at the guess's loads its rear polygon is 26.5 kN, at the loads of
+    # that braking 9.7 kN: the rear tires saturate and the body swings 9 cm over the lane edge.
+    overrides = ["initial_speed_mps=18", "friction.mu_turn=0.9", "turn.start_ahead_m=40",
+                 "turn.direction=right", "turn.clothoid_m=0", "vehicle=truck"]
+    m = compute_metrics(run_scenario(load_scenario("turn", overrides), "GT"))
+    assert m.feasibility == "feasible"
+    assert m.max_lane_excursion_m == 0.0
+    guess_loads = compute_metrics(run_scenario(
+        load_scenario("turn", [*overrides, "planner.load_transfer=false"]), "GT"))
+    assert guess_loads.max_lane_excursion_m > 0.05
+    assert guess_loads.max_body_slip_rad > m.max_body_slip_rad
