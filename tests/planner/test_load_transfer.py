@@ -115,3 +115,25 @@ def test_the_truck_leaves_the_arc_in_its_lane_when_the_plans_count_their_load_tr
         load_scenario("turn", [*overrides, "planner.load_transfer=false"]), "GT"))
     assert guess_loads.max_lane_excursion_m > 0.05
     assert guess_loads.max_body_slip_rad > m.max_body_slip_rad
+
+
+def test_a_braking_plan_logs_the_loads_and_limits_of_its_own_braking() -> None:
+    from mufusion.planner.ocp import PlannerConfig
+    from mufusion.planner.planner import TractionAdaptivePlanner
+
+    planner = TractionAdaptivePlanner(TRUCK, PlannerConfig(use_sampling=False))
+    x0 = np.zeros(N_STATES)
+    x0[State.vx] = 15.0
+    plan = None
+    for i in range(3):  # "emergency": stop, braking at the polygons' limit
+        plan = planner.step(x0, 0.1 * i, lambda s: 0.0 * s, lambda s: MU + 0.0 * s, [],
+                            "emergency", 15.0)
+        x0 = plan.states[1]
+    assert plan is not None and plan.ok
+    fx = plan.inputs[:, Input.fxf] + plan.inputs[:, Input.fxr]
+    assert fx[0] < -20e3
+    fzf, fzr = _loads(float(fx[0]))
+    assert plan.normal_load_front_n[0] == pytest.approx(fzf)
+    assert plan.normal_load_rear_n[0] == pytest.approx(fzr)
+    assert plan.force_limit_front_n[0] == pytest.approx(LAMBDA * MU * fzf)
+    assert plan.force_limit_rear_n[0] == pytest.approx(LAMBDA * MU * fzr)
