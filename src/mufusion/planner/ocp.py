@@ -215,6 +215,16 @@ MIN_LOAD_SHARE = 0.05
 """Floor of an axle's normal load in the polygons, as a share of the weight."""
 
 
+def axle_loads_n(inputs: np.ndarray, params: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
+    """Axle loads ``(F_zf, F_zr)`` [N] per stage of the forces ``inputs (N, 3)``: pitch load
+    transfer of ``a_x = (F_xf + F_xr) / m``, each floored at :data:`MIN_LOAD_SHARE` of the
+    weight (what the polygons use)."""
+    us = np.asarray(inputs, dtype=float)
+    fzf, fzr = normal_loads_n((us[:, Input.fxf] + us[:, Input.fxr]) / params.mass_kg, params)
+    floor = MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2
+    return np.maximum(fzf, floor), np.maximum(fzr, floor)
+
+
 def longitudinal_force_bounds_n(params: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
     """Bounds on ``(F_xf, F_xr)`` [N] from the actuators: the front axle only brakes (the
     :class:`~mufusion.vehicle.actuators.ActuatorCommand` clips front drive torque), the rear
@@ -256,10 +266,7 @@ def stage_parameters(
     ``rear_stiffness``, ``curvature`` and the stacked ``p`` of shape ``(N, N_PARAMS)``.
     """
     s_k = guess_states[:-1, State.s]
-    ax = (guess_inputs[:, Input.fxf] + guess_inputs[:, Input.fxr]) / params.mass_kg
-    fzf, fzr = normal_loads_n(ax, params)
-    fzf = np.maximum(fzf, MIN_LOAD_SHARE * params.mass_kg * 9.81)
-    fzr = np.maximum(fzr, MIN_LOAD_SHARE * params.mass_kg * 9.81)
+    fzf, fzr = axle_loads_n(guess_inputs, params)
     # np.minimum(np.maximum(...)): np.clip's values (non-zero bounds) at less overhead.
     mu = np.minimum(np.maximum(np.asarray(mu_hat_of_s(s_k), dtype=float), MU_MIN), MU_MAX)
     kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
@@ -273,10 +280,12 @@ def stage_parameters(
     p[:, Param.rear_stiffness] = c_r
     p[:, Param.radius_front] = radius_front
     p[:, Param.radius_rear] = radius_rear
-    p[:, Param.utilized_friction] = utilization_factor * mu
+    utilized = utilization_factor * mu
+    p[:, Param.utilized_friction] = utilized
     return {
         "mu_hat": mu, "fzf": fzf, "fzr": fzr, "radius_front": radius_front,
-        "radius_rear": radius_rear, "rear_stiffness": c_r, "curvature": kappa, "p": p,
+        "radius_rear": radius_rear, "utilized_friction": utilized, "rear_stiffness": c_r,
+        "curvature": kappa, "p": p,
     }
 
 
@@ -290,12 +299,8 @@ def plan_polygon_radii_n(
     """
     if not load_transfer:
         return stage["radius_front"], stage["radius_rear"]
-    us = np.asarray(inputs, dtype=float)
-    fzf, fzr = normal_loads_n((us[:, Input.fxf] + us[:, Input.fxr]) / params.mass_kg, params)
-    floor = MIN_LOAD_SHARE * params.mass_kg * 9.81
-    # radius / F_z of the stage parameters is λ μ̂ (the same factor front and rear).
-    friction = stage["radius_front"] / stage["fzf"]
-    return friction * np.maximum(fzf, floor), friction * np.maximum(fzr, floor)
+    fzf, fzr = axle_loads_n(inputs, params)
+    return stage["utilized_friction"] * fzf, stage["utilized_friction"] * fzr
 
 
 MAX_SWING_HEADING_RAD = 0.1

@@ -25,6 +25,7 @@ from mufusion.planner.ocp import (
     PlannerConfig,
     PlannerMode,
     PlannerObstacle,
+    axle_loads_n,
     lateral_corridor,
     plan_polygon_radii_n,
     stage_parameters,
@@ -344,8 +345,7 @@ class TractionAdaptivePlanner:
         limit_front, limit_rear = plan_polygon_radii_n(us, stage, par, cfg.load_transfer)
         load_front, load_rear = stage["fzf"], stage["fzr"]
         if cfg.load_transfer:
-            load_front = limit_front * stage["fzf"] / stage["radius_front"]
-            load_rear = limit_rear * stage["fzf"] / stage["radius_front"]
+            load_front, load_rear = axle_loads_n(us, par)
         plan = Plan(
             t0_s=float(t_s), states=xs, inputs=us, rear_lateral_force_n=np.asarray(fyr),
             mu_hat=stage["mu_hat"], normal_load_front_n=load_front,
