@@ -28,6 +28,7 @@ from mufusion.planner.ocp import (
     constraint_expressions,
     lateral_corridor,
     longitudinal_force_bounds_n,
+    plan_polygon_radii_n,
     polygon_directions,
     stage_parameters,
 )
@@ -100,7 +101,8 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
     k3 = f(x + 0.5 * dt * k2)
     k4 = f(x + dt * k3)
     model.set_rhs("x", x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4))
-    h = constraint_expressions(x, u, p, TRUCK, config.polygon_sides, config.load_transfer)
+    h = constraint_expressions(x, u, p, TRUCK, config.polygon_sides,
+                               load_transfer=config.load_transfer)
     model.set_expression("h_front", h[: config.polygon_sides])
     model.set_expression("h_rear", h[config.polygon_sides:])
     model.setup()
@@ -176,11 +178,14 @@ def solution_margins() -> dict[str, float]:
              "abs_heading_error_rad": 0.0, "min_speed_mps": np.inf}
     check = planner_module.check_solution
 
-    def measuring_check(xs, us, stage, d_lo, d_hi, params, n_sides, limits):
-        reason = check(xs, us, stage, d_lo, d_hi, params, n_sides, limits)
+    def measuring_check(xs, us, stage, d_lo, d_hi, params, n_sides, limits, *, load_transfer):
+        reason = check(xs, us, stage, d_lo, d_hi, params, n_sides, limits,
+                       load_transfer=load_transfer)
         if reason.value != "none":
             return reason
         normals, ratio = polygon_directions(n_sides)
+        # The radii the plan was solved with (its own loads with load transfer).
+        radius_front, radius_rear = plan_polygon_radii_n(us, stage, params, load_transfer)
         front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
         fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], params)
         rear = normals @ np.stack([us[:, Input.fxr], fyr])
@@ -189,8 +194,8 @@ def solution_margins() -> dict[str, float]:
         bound = np.maximum(lower - fx, fx - upper) / np.maximum(np.abs(lower), np.abs(upper))
         d = xs[1:, State.d]
         for key, value in (
-            ("front_polygon_excess", (front / stage["radius_front"] - ratio).max()),
-            ("rear_polygon_excess", (rear / stage["radius_rear"] - ratio).max()),
+            ("front_polygon_excess", (front / radius_front - ratio).max()),
+            ("rear_polygon_excess", (rear / radius_rear - ratio).max()),
             ("force_bound_excess", bound.max()),
             ("corridor_excess_m", np.maximum(d_lo - d, d - d_hi).max()),
             ("abs_heading_error_rad", np.abs(xs[:, State.dpsi]).max()),

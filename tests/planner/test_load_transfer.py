@@ -48,7 +48,8 @@ def _rows(fxf_n: float, fxr_n: float, fyf_n: float, load_transfer: bool) -> np.n
     import casadi as ca
 
     x, u, p = ca.SX.sym("x", N_STATES), ca.SX.sym("u", N_INPUTS), ca.SX.sym("p", len(Param))
-    h = ca.Function("h", [x, u, p], [constraint_expressions(x, u, p, TRUCK, 12, load_transfer)])
+    h = ca.Function("h", [x, u, p], [constraint_expressions(x, u, p, TRUCK, 12,
+                                                                load_transfer=load_transfer)])
     state = np.zeros(N_STATES)
     state[State.vx] = 15.0
     forces = np.zeros(N_INPUTS)

@@ -294,7 +294,7 @@ def _describe(
     model.f_expl_expr = f
     model.f_impl_expr = model.xdot - f
     model.con_h_expr = constraint_expressions(x[:N_STATES], forces, p, params, ns,
-                                             config.load_transfer)
+                                             load_transfer=config.load_transfer)
     ocp.model = model
     ocp.dims.N = n
     ocp.parameter_values = np.ones(N_PARAMS)

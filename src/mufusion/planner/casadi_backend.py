@@ -65,7 +65,7 @@ class CasadiBackend:
         step = ca.Function("step", [x, u, p], [x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)])
         h = ca.Function("h", [x, u, p],
                         [constraint_expressions(x[:N_STATES], forces(x, u), p, params, ns,
-                                               config.load_transfer)])
+                                               load_transfer=config.load_transfer)])
 
         ny = N_STATES + N_INPUTS
         X = ca.SX.sym("X", nx, n + 1)

@@ -362,7 +362,7 @@ def lateral_corridor(
 
 
 def constraint_expressions(
-    x: Any, u: Any, p: Any, params: VehicleParams, n_sides: int, load_transfer: bool = False
+    x: Any, u: Any, p: Any, params: VehicleParams, n_sides: int, *, load_transfer: bool
 ) -> Any:
     """Friction polygons normalised by their radii, as CasADi expressions: ``h ≤ 0``.
 

@@ -323,7 +323,7 @@ class TractionAdaptivePlanner:
                     reason = FallbackReason.SOLVER_STATUS
                 else:
                     reason = check_solution(xs, us, stage, d_lo, d_hi, par, cfg.polygon_sides,
-                                            cfg.plausibility, cfg.load_transfer)
+                                            cfg.plausibility, load_transfer=cfg.load_transfer)
             except Exception as exc:  # never raise inside the loop
                 _log.warning("planner backend raised %r", exc)
                 reason = FallbackReason.EXCEPTION

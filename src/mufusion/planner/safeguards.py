@@ -142,7 +142,8 @@ def check_solution(
     params: VehicleParams,
     n_sides: int,
     limits: PlausibilityLimits,
-    load_transfer: bool = False,
+    *,
+    load_transfer: bool,
 ) -> FallbackReason:
     """``FallbackReason.NONE`` if a solution may be used, else why not.
 
