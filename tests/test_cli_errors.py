@@ -28,6 +28,7 @@ def _said(result) -> str:
         (["run", "turn", "--set", "seed=1", "--set", "seed=2"], "'seed' is given more than once"),
         (["run", "popup", "--set", "duration_s=0.4"], "duration_s must exceed"),
         (["run", "popup", "--set", "sim.controller_rate_hz=60"], "sim.controller_rate_hz"),
+        (["run", "turn", "--set", "perturbation.speed_mps=13"], "perturbation.speed_mps"),
         (["run", "popup", "-c", "F_safe"], "--config must be one of"),
         (["run", "nowhere.toml"], "does not exist"),
     ],

@@ -83,6 +83,10 @@ class RunMetrics:
     faults, reactions
         The injected fault kinds, and the loop's reactions counted by kind
         (e.g. ``"estimate_fallback×3, minimal_risk×1"``; empty when none).
+    start_speed_mps, start_lateral_offset_m, start_heading_error_rad
+        The state the run started from (its first tick): the scenario's, or the draw of its
+        ``perturbation`` (:func:`mufusion.scenarios.config.perturbed`). ``None`` in records
+        written before they were kept.
     """
 
     collision: bool
@@ -119,6 +123,9 @@ class RunMetrics:
     minimal_risk_at_s: float | None = None
     faults: str = ""
     reactions: str = ""
+    start_speed_mps: float | None = None
+    start_lateral_offset_m: float | None = None
+    start_heading_error_rad: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {k: _clean(v) for k, v in asdict(self).items()}
@@ -200,6 +207,9 @@ def compute_metrics(log: RunLog) -> RunMetrics:
         feasibility=log.meta.feasibility,
         feasibility_margin_mps=log.meta.feasibility_margin_mps,
         **_reliability(log),
+        start_speed_mps=float(ts["speed_mps"].iloc[0]),
+        start_lateral_offset_m=float(ts["d_m"].iloc[0]),
+        start_heading_error_rad=float(ts["dpsi_rad"].iloc[0]),
     )
 
 

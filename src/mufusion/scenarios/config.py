@@ -10,8 +10,9 @@ the scenario's name.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, TypeVar
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from mufusion.estimators import ErrorModel
@@ -183,12 +184,40 @@ class SimSettings(_Strict):
         return _SURFACE_TIRES[self.tires]
 
 
+class InitialPerturbation(_Strict):
+    """Half-widths of uniform draws around the initial state; the run's seed draws them.
+
+    All zero (the default): the run starts exactly at the scenario's initial state and draws
+    nothing. Otherwise each run draws a speed, a lateral offset and a heading error uniformly
+    within ``± half-width`` of the scenario's values (:func:`perturbed`), so a campaign with
+    ``seeds = N`` repeats every variant from N nearby starts: an outcome decided by centimetres
+    shows up as a spread, not as one verdict.
+    """
+
+    speed_mps: Annotated[float, Field(ge=0.0, le=2.0, allow_inf_nan=False)] = 0.0
+    lateral_offset_m: Annotated[float, Field(ge=0.0, le=0.5, allow_inf_nan=False)] = 0.0
+    heading_rad: Annotated[float, Field(ge=0.0, le=0.1, allow_inf_nan=False)] = 0.0
+
+    @property
+    def active(self) -> bool:
+        """Whether any half-width is above zero."""
+        return self.speed_mps > 0.0 or self.lateral_offset_m > 0.0 or self.heading_rad > 0.0
+
+
 class _Scenario(_Strict):
     """What every scenario kind has: vehicle, speeds, duration, seed, estimation, solver."""
 
     description: str = ""
     vehicle: VehicleName = "truck"
     initial_speed_mps: Annotated[float, Field(gt=0.0, le=40.0)] = 12.0
+    initial_lateral_offset_m: Annotated[float, Field(ge=-1.0, le=1.0, allow_inf_nan=False)] = 0.0
+    """Start offset of the centre of gravity from the lane centre [m], left positive."""
+    initial_heading_error_rad: Annotated[
+        float, Field(ge=-0.2, le=0.2, allow_inf_nan=False)
+    ] = 0.0
+    """Start heading relative to the lane [rad], left positive."""
+    perturbation: InitialPerturbation = InitialPerturbation()
+    """Seeded draws around the initial state (speed, offset, heading); none by default."""
     reference_speed_mps: Annotated[float, Field(gt=0.0, le=40.0)] | None = None
     """Cruise speed the planner tracks; defaults to the initial speed."""
     duration_s: Annotated[float, Field(gt=0.0, le=120.0)] = 10.0
@@ -217,6 +246,24 @@ class _Scenario(_Strict):
                     f"faults.{i}.start_s must be before duration_s = {self.duration_s} s "
                     f"(a fault after the end does nothing), got {fault.start_s}"
                 )
+        pert = self.perturbation
+        if self.initial_speed_mps - pert.speed_mps <= 0.0:
+            raise ValueError(
+                f"perturbation.speed_mps must be below initial_speed_mps = "
+                f"{self.initial_speed_mps} m/s (a draw would start at rest or reversing), "
+                f"got {pert.speed_mps}"
+            )
+        if abs(self.initial_lateral_offset_m) + pert.lateral_offset_m > 1.0:
+            raise ValueError(
+                "perturbation.lateral_offset_m plus |initial_lateral_offset_m| must be at most "
+                f"1.0 m (the start stays near the lane centre), got {pert.lateral_offset_m} + "
+                f"{abs(self.initial_lateral_offset_m)}"
+            )
+        if abs(self.initial_heading_error_rad) + pert.heading_rad > 0.2:
+            raise ValueError(
+                "perturbation.heading_rad plus |initial_heading_error_rad| must be at most "
+                f"0.2 rad, got {pert.heading_rad} + {abs(self.initial_heading_error_rad)}"
+            )
         if self.comparison_time_s >= self.duration_s:
             raise ValueError(
                 f"duration_s must exceed comparison_time_s = {self.comparison_time_s} s "
@@ -251,6 +298,9 @@ class _Scenario(_Strict):
     def start_s_m(self) -> float:
         """The vehicle's start progress ``s0`` [m] (the paper's "s = 0")."""
         return self.road.approach_m
+
+
+_S = TypeVar("_S", bound=_Scenario)
 
 
 class TurnScenario(_Scenario):
@@ -324,6 +374,45 @@ SCENARIO_KINDS: dict[str, type[TurnScenario] | type[PopupScenario]] = {
     "turn": TurnScenario,
     "popup": PopupScenario,
 }
+
+
+def perturbed(cfg: _S, rng: np.random.Generator) -> _S:
+    """The scenario with its initial-state perturbation drawn from ``rng`` and applied.
+
+    Returns ``cfg`` itself when :attr:`_Scenario.perturbation` is all zero (nothing is drawn).
+    Otherwise three uniform draws, always in the order speed, lateral offset, heading (a zero
+    half-width scales its draw to nothing, so the others do not depend on it), move
+    ``initial_speed_mps``, ``initial_lateral_offset_m`` and ``initial_heading_error_rad``; the
+    cruise speed stays the scenario's (``reference_speed_mps`` is fixed to it), and the returned
+    scenario has no perturbation left, so it is the concrete start that was driven (its
+    ``model_dump`` goes into the run's metadata, and the feasibility oracle classifies its speed).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mufusion.scenarios.loading import load_scenario
+    >>> cfg = load_scenario("turn", ["perturbation.lateral_offset_m=0.2"])
+    >>> a = perturbed(cfg, np.random.default_rng(1))
+    >>> abs(a.initial_lateral_offset_m) <= 0.2, a.initial_speed_mps == cfg.initial_speed_mps
+    (True, True)
+    >>> perturbed(load_scenario("turn"), np.random.default_rng(1)) is not None
+    True
+    """
+    pert = cfg.perturbation
+    if not pert.active:
+        return cfg
+    unit = rng.uniform(-1.0, 1.0, size=3)
+    return cfg.model_copy(update={
+        "reference_speed_mps": cfg.cruise_speed_mps,
+        "initial_speed_mps": cfg.initial_speed_mps + pert.speed_mps * float(unit[0]),
+        "initial_lateral_offset_m": (
+            cfg.initial_lateral_offset_m + pert.lateral_offset_m * float(unit[1])
+        ),
+        "initial_heading_error_rad": (
+            cfg.initial_heading_error_rad + pert.heading_rad * float(unit[2])
+        ),
+        "perturbation": InitialPerturbation(),
+    })
 
 
 def planner_lane_bounds_m(

@@ -26,7 +26,12 @@ from mufusion.planner import (
     TractionAdaptivePlanner,
 )
 from mufusion.road import Obstacle, Road, obstacle_corners
-from mufusion.scenarios.config import PopupScenario, TurnScenario, planner_lane_bounds_m
+from mufusion.scenarios.config import (
+    PopupScenario,
+    TurnScenario,
+    perturbed,
+    planner_lane_bounds_m,
+)
 from mufusion.scenarios.feasibility import classify_scenario
 from mufusion.sim.log import RunLog
 from mufusion.sim.loop import ClosedLoop
@@ -107,6 +112,9 @@ def run_scenario(
     The run limits the BLAS thread pools (OpenBLAS of numpy and scipy) to one thread.
     """
     configuration = Configuration.parse(configuration)
+    # The start's perturbation has its own stream, so the estimators' draws (from the seed
+    # itself) are the same with and without it.
+    cfg = perturbed(cfg, np.random.default_rng(np.random.SeedSequence(cfg.seed, spawn_key=(1,))))
     params = vehicle_preset(cfg.vehicle)
     road = cfg.build_road(params)
     s0 = cfg.start_s_m
@@ -127,7 +135,11 @@ def run_scenario(
         classes=class_table(cfg.estimation.class_table),
         local_timing=local_timing(cfg.estimation.local_timing),
     )
-    x0_x, x0_y, x0_psi = (float(v) for v in road.to_cartesian(s0, 0.0, 0.0))
+    x0_x, x0_y, x0_psi = (
+        float(v) for v in road.to_cartesian(
+            s0, cfg.initial_lateral_offset_m, cfg.initial_heading_error_rad
+        )
+    )
     plant = Plant(params, initial_state(params, x0_x, x0_y, x0_psi, cfg.initial_speed_mps),
                   dt_s=1.0 / rates.plant_hz, surface_tires=cfg.sim.surface_tires())
     loop = ClosedLoop(
