@@ -10,7 +10,7 @@ import pandas as pd
 from PIL import Image
 from typer.testing import CliRunner
 
-from mufusion.campaign.report import load_campaign_results
+from mufusion.campaign.report import load_campaign_results, rates_by_class_markdown
 from mufusion.cli import app
 
 
@@ -72,3 +72,23 @@ def test_partial_campaign_is_flagged_and_a_missing_directory_exits_2(tmp_path):
     assert "Partial campaign" in (out / "report.md").read_text()
     result = CliRunner().invoke(app, ["campaign-report", str(tmp_path / "nothing")])
     assert result.exit_code == 2 and "no campaign results" in " ".join(result.output.split())
+
+
+def test_rates_are_split_by_the_oracles_class():
+    rows = []
+    for cls, exits in (("feasible", 1), ("infeasible", 4)):
+        for config in ("GT", "F-safe"):
+            for seed in range(5):
+                rows.append({"scenario": "turn", "config": config, "seed": seed,
+                             "feasibility": cls, "error": None, "collision": False,
+                             "left_lane": seed < exits + (config == "F-safe")})
+    table = pd.DataFrame(rows)
+    md = "\n".join(rates_by_class_markdown(table))
+    # Feasible: GT 1 of 5 (20 %, Wilson [4, 62] %), F-safe 2 of 5; infeasible 4 and 5 of 5.
+    assert "| feasible | GT | 0 % [0, 43] (0/5) | 20 % [4, 62] (1/5) |" in md
+    assert "| feasible | F-safe | 0 % [0, 43] (0/5) | 40 % [12, 77] (2/5) |" in md
+    assert "| infeasible | F-safe | 0 % [0, 43] (0/5) | 100 % [57, 100] (5/5) |" in md
+    assert md.index("| feasible | GT") < md.index("| infeasible | GT")
+    # One class only, or no oracle column: nothing to split.
+    assert rates_by_class_markdown(table[table["feasibility"] == "feasible"]) == []
+    assert rates_by_class_markdown(table.drop(columns="feasibility")) == []

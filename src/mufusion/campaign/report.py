@@ -129,6 +129,40 @@ def rates_markdown(rates: pd.DataFrame) -> list[str]:
     return lines
 
 
+def rates_by_class_markdown(table: pd.DataFrame) -> list[str]:
+    """Rates per scenario, oracle class and configuration (``[]`` without a ``feasibility``
+    column or with a single class): the issue's acceptance is per class (GT must not fail where
+    physics allows), and pooled rates mix the classes."""
+    if "feasibility" not in table.columns:
+        return []
+    classes = table["feasibility"].dropna()
+    if classes.nunique() < 2:
+        return []
+    order = {name: i for i, name in enumerate(("feasible", "marginal", "infeasible"))}
+    rates = outcome_rates(table, by=("scenario", "feasibility", "config"))
+    lines = ["### By the oracle's class", "",
+             "The same rates within each feasibility class of `mufusion.scenarios.feasibility` "
+             "(docs/feasibility.md).", ""]
+    for scenario, group in rates.groupby("scenario", sort=False):
+        outcomes = list(dict.fromkeys(group["outcome"]))
+        keys = sorted(
+            dict.fromkeys(zip(group["feasibility"], group["config"], strict=True)),
+            key=lambda k: (order.get(str(k[0]), len(order)), str(k[0])),
+        )
+        rows = []
+        for cls, config in keys:
+            sub = group[(group["feasibility"] == cls) & (group["config"] == config)]
+            cells = [str(cls), str(config)]
+            for outcome in outcomes:
+                r = sub[sub["outcome"] == outcome].iloc[0]
+                cells.append("–" if r["runs"] == 0 else
+                             f"{100 * r['rate']:.0f} % [{100 * r['ci_low']:.0f}, "
+                             f"{100 * r['ci_high']:.0f}] ({r['count']}/{r['runs']})")
+            rows.append(cells)
+        lines += [f"**{scenario}**", "", *_table(["class", "config", *outcomes], rows)]
+    return lines
+
+
 def graded_markdown(graded: pd.DataFrame) -> list[str]:
     """One table per scenario and graded metric: configurations × distribution statistics."""
     lines: list[str] = []
@@ -162,6 +196,7 @@ def report_markdown(data: CampaignResults, figures: Mapping[str, Path], base: Pa
            f"{100 * CONFIDENCE:.0f} % confidence (rate [low, high] (runs with it / runs)).", ""]
     md += rates_markdown(rates)
     md += _figure_lines(figures, "rates", base)
+    md += rates_by_class_markdown(table)
     md += ["## Graded outcomes", "",
            "Distribution over the runs where the metric is defined (e.g. clearance only for runs "
            "that passed the obstacle); p5/p95 are the 5th and 95th percentiles.", ""]
