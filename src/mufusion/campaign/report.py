@@ -106,6 +106,14 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
             *("| " + " | ".join(r) + " |" for r in rows), ""]
 
 
+def _rate_cell(r: pd.Series) -> str:
+    """``rate [low, high] (k/n)`` in percent, ``–`` without runs."""
+    if r["runs"] == 0:
+        return "–"
+    return (f"{100 * r['rate']:.0f} % [{100 * r['ci_low']:.0f}, {100 * r['ci_high']:.0f}] "
+            f"({r['count']}/{r['runs']})")
+
+
 def rates_markdown(rates: pd.DataFrame) -> list[str]:
     """Rates as one table per scenario: configurations × outcomes, ``rate [low, high] (k/n)``."""
     lines: list[str] = []
@@ -117,11 +125,7 @@ def rates_markdown(rates: pd.DataFrame) -> list[str]:
             cells = [config]
             for outcome in outcomes:
                 r = group[(group["config"] == config) & (group["outcome"] == outcome)].iloc[0]
-                if r["runs"] == 0:
-                    cells.append("–")
-                    continue
-                cells.append(f"{100 * r['rate']:.0f} % [{100 * r['ci_low']:.0f}, "
-                             f"{100 * r['ci_high']:.0f}] ({r['count']}/{r['runs']})")
+                cells.append(_rate_cell(r))
             failed = int(group[group["config"] == config]["failed"].iloc[0])
             cells.append(str(failed))
             rows.append(cells)
@@ -154,10 +158,7 @@ def rates_by_class_markdown(table: pd.DataFrame) -> list[str]:
             sub = group[(group["feasibility"] == cls) & (group["config"] == config)]
             cells = [str(cls), str(config)]
             for outcome in outcomes:
-                r = sub[sub["outcome"] == outcome].iloc[0]
-                cells.append("–" if r["runs"] == 0 else
-                             f"{100 * r['rate']:.0f} % [{100 * r['ci_low']:.0f}, "
-                             f"{100 * r['ci_high']:.0f}] ({r['count']}/{r['runs']})")
+                cells.append(_rate_cell(sub[sub["outcome"] == outcome].iloc[0]))
             rows.append(cells)
         lines += [f"**{scenario}**", "", *_table(["class", "config", *outcomes], rows)]
     return lines
