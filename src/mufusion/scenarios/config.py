@@ -395,7 +395,8 @@ def perturbed(cfg: _S, rng: np.random.Generator) -> _S:
     >>> a = perturbed(cfg, np.random.default_rng(1))
     >>> abs(a.initial_lateral_offset_m) <= 0.2, a.initial_speed_mps == cfg.initial_speed_mps
     (True, True)
-    >>> perturbed(load_scenario("turn"), np.random.default_rng(1)) is not None
+    >>> plain = load_scenario("turn")  # no perturbation: the scenario itself, nothing drawn
+    >>> perturbed(plain, np.random.default_rng(1)) is plain
     True
     """
     pert = cfg.perturbation
