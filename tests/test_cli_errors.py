@@ -29,6 +29,8 @@ def _said(result) -> str:
         (["run", "popup", "--set", "duration_s=0.4"], "duration_s must exceed"),
         (["run", "popup", "--set", "sim.controller_rate_hz=60"], "sim.controller_rate_hz"),
         (["run", "turn", "--set", "perturbation.speed_mps=13"], "perturbation.speed_mps"),
+        (["run", "turn", "--set", "planner.reference_braking_fraction=0"],
+         "planner.reference_braking_fraction"),
         (["run", "popup", "-c", "F_safe"], "--config must be one of"),
         (["run", "nowhere.toml"], "does not exist"),
     ],

@@ -121,6 +121,8 @@ def test_config_rejects_bad_values():
         PlannerConfig(polygon_sides=8)
     with pytest.raises(ValueError, match="utilization_factor"):
         PlannerConfig(utilization_factor=1.5)
+    with pytest.raises(ValueError, match="reference_braking_fraction"):
+        PlannerConfig(reference_braking_fraction=0.0)
 
 
 def test_evade_mode_spends_no_friction_on_traction_and_does_not_speed_up(planner):

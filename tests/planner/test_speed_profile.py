@@ -56,10 +56,41 @@ def test_profile_respects_every_curvature_limit() -> None:
     assert np.all(-dv2 / 2.0 <= 0.9 * 0.8 * 9.81 + 1e-9)
 
 
+def test_braking_fraction_starts_the_ramp_earlier_by_hand() -> None:
+    s = np.arange(0.0, 40.01, 0.01)
+    v = max_speed_profile_mps(s, _curvature(s), np.full(s.size, 0.4), 0.9, 30.0,
+                              braking_fraction=0.5)
+    # The arc's limit is unchanged: √98.8848 = 9.94408 m/s.
+    assert v[-1] == pytest.approx(9.94408, abs=1e-5)
+    # Half the deceleration before it: √(98.8848 + 3.5316·29.99) = √204.7974 = 14.31074 m/s.
+    assert v[0] == pytest.approx(14.31074, abs=1e-4)
+    full = max_speed_profile_mps(s, _curvature(s), np.full(s.size, 0.4), 0.9, 30.0)
+    assert np.all(v <= full)
+    np.testing.assert_array_equal(v[s >= ARC_START_M], full[s >= ARC_START_M])
+
+
+def test_reference_with_a_braking_reserve_slows_earlier_and_reaches_as_far() -> None:
+    stages = np.linspace(0.0, 56.0, 41)
+    curve = lambda s: np.where(np.asarray(s) >= 60.0, 1 / 28, 0.0)  # noqa: E731
+    full = curve_speed_reference_mps(stages, curve, _mu(0.4), 14.0, 0.9, 4.0)
+    reserve = curve_speed_reference_mps(stages, curve, _mu(0.4), 14.0, 0.9, 4.0,
+                                        braking_fraction=0.6)
+    np.testing.assert_array_equal(
+        full, curve_speed_reference_mps(stages, curve, _mu(0.4), 14.0, 0.9, 4.0, 1.0))
+    # Full braking reaches 14 m/s 12.9 m before the arc ((196 − 98.88) / (2·3.5316) = 13.75 m,
+    # on the 1 m grid); with 0.6 of it, (196 − 98.88) / (1.2·3.5316) = 22.9 m before it.
+    assert full[stages <= 60.0 - 14.0].min() == pytest.approx(14.0)
+    assert reserve[stages >= 60.0 - 22.0].max() < 14.0
+    assert np.all(reserve <= full)
+
+
 def test_profile_rejects_bad_input() -> None:
     s = np.arange(3.0)
     with pytest.raises(ValueError, match="accel_fraction"):
         max_speed_profile_mps(s, np.zeros(3), np.ones(3), 1.5, 10.0)
+    for bad in (0.0, 1.2, float("nan")):
+        with pytest.raises(ValueError, match="braking_fraction"):
+            max_speed_profile_mps(s, np.zeros(3), np.ones(3), 0.9, 10.0, braking_fraction=bad)
     with pytest.raises(ValueError, match="s_m must increase"):
         max_speed_profile_mps(s[::-1], np.zeros(3), np.ones(3), 0.9, 10.0)
     with pytest.raises(ValueError, match="equal length"):
@@ -140,3 +171,4 @@ def test_profile_equals_the_textbook_recursion_bit_for_bit(steps, data, end_spee
     with np.errstate(divide="ignore"):
         expected = _textbook_profile(s, kappa, mu, 0.9, end_speed)
     np.testing.assert_array_equal(max_speed_profile_mps(s, kappa, mu, 0.9, end_speed), expected)
+

@@ -162,6 +162,10 @@ class PlannerConfig:
     # Track min(cruise speed, the point mass's highest speed along the lane centre) instead of the
     # cruise speed alone (planner/speed_profile.py).
     curve_speed_reference: bool = True
+    # Share of the friction the speed reference's braking ramps before a curve assume, in (0, 1]
+    # (planner/speed_profile.py): below 1 the reference starts braking earlier than the polygon
+    # requires and keeps the rest as a reserve.
+    reference_braking_fraction: float = 1.0
     # Plan the front lateral force as a state whose rate the steering's rate limit bounds
     # (planner/front_force.py; beyond the paper, whose forces are free inputs).
     steering_rate_limit: bool = True
@@ -197,6 +201,9 @@ class PlannerConfig:
             raise ValueError(
                 f"max_cruise_accel_mps2 must be in (0, 10] m/s², got {self.max_cruise_accel_mps2}"
             )
+        if not 0.0 < self.reference_braking_fraction <= 1.0:
+            raise ValueError("reference_braking_fraction must be in (0, 1], "
+                             f"got {self.reference_braking_fraction}")
         if not 1 <= self.cold_start_iterations <= 20:
             raise ValueError(
                 f"cold_start_iterations must be in [1, 20], got {self.cold_start_iterations}"

@@ -295,7 +295,7 @@ class TractionAdaptivePlanner:
                 speed_ref = curve_speed_reference_mps(
                     guess_x[:, State.s], curvature_of_s, mu_of_s, reference_speed_mps,
                     cfg.utilization_factor * np.cos(np.pi / cfg.polygon_sides),
-                    cfg.horizon_steps * cfg.dt_s,
+                    cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
                 )
             stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
                                      cfg.utilization_factor, cfg.stiffness_table)

@@ -32,6 +32,7 @@ def max_speed_profile_mps(
     mu: np.ndarray,
     accel_fraction: float,
     end_speed_mps: float,
+    braking_fraction: float = 1.0,
 ) -> np.ndarray:
     """Highest speed at each grid point from which every later curvature limit can be met.
 
@@ -45,6 +46,11 @@ def max_speed_profile_mps(
         Fraction of ``μ g`` the point mass may use, in (0, 1].
     end_speed_mps
         Speed allowed beyond the last grid point [m/s] (e.g. the cruise speed).
+    braking_fraction
+        Share of the friction left after the curvature's lateral demand that the braking ramps
+        before a tighter point use, in (0, 1]. 1 brakes as late as the friction allows; less
+        starts braking earlier and keeps the rest as a reserve (the curvature limits
+        themselves are unchanged).
 
     Returns
     -------
@@ -54,8 +60,8 @@ def max_speed_profile_mps(
     Raises
     ------
     ValueError
-        If the arrays differ in shape, ``s_m`` does not increase, or ``accel_fraction`` is not in
-        (0, 1].
+        If the arrays differ in shape, ``s_m`` does not increase, or ``accel_fraction`` or
+        ``braking_fraction`` is not in (0, 1].
 
     Examples
     --------
@@ -75,6 +81,8 @@ def max_speed_profile_mps(
         raise ValueError("s_m must increase")
     if not 0.0 < accel_fraction <= 1.0:
         raise ValueError(f"accel_fraction must be in (0, 1], got {accel_fraction!r}")
+    if not 0.0 < braking_fraction <= 1.0:
+        raise ValueError(f"braking_fraction must be in (0, 1], got {braking_fraction!r}")
     accel = accel_fraction * mu_arr * GRAVITY_MPS2
     with np.errstate(divide="ignore"):
         limit = np.where(kappa > 0.0, accel / np.maximum(kappa, 1e-300), np.inf)
@@ -84,11 +92,12 @@ def max_speed_profile_mps(
     u = np.minimum(limit, end_speed_mps**2).tolist()
     k_list, a_list, s_list = kappa.tolist(), accel.tolist(), s.tolist()
     u_next, k_next, s_next = u[-1], k_list[-1], s_list[-1]
+    two_b = 2.0 * braking_fraction
     for i in range(s.size - 2, -1, -1):
         k_i, s_i, a = k_list[i], s_list[i], a_list[i]
         lateral = u_next * (k_next if k_next > k_i else k_i)  # max(k_i, k_next)
         braking = math.sqrt(max(a * a - lateral * lateral, 0.0))
-        reachable = u_next + 2.0 * braking * (s_next - s_i)
+        reachable = u_next + two_b * braking * (s_next - s_i)
         u_next = u[i] = reachable if reachable < u[i] else u[i]  # min(u[i], reachable)
         k_next, s_next = k_i, s_i
     return np.sqrt(np.array(u))
@@ -101,6 +110,7 @@ def curve_speed_reference_mps(
     cruise_speed_mps: float,
     accel_fraction: float,
     horizon_time_s: float,
+    braking_fraction: float = 1.0,
 ) -> np.ndarray:
     """The cruise speed capped by :func:`max_speed_profile_mps` at the stages' positions.
 
@@ -112,7 +122,7 @@ def curve_speed_reference_mps(
     coarse = s0 + np.arange(0.0, MAX_LOOKAHEAD_M + PROFILE_STEP_M, PROFILE_STEP_M)
     mu_min = max(float(np.min(mu_hat_of_s(coarse))), 0.05)
     reach = cruise_speed_mps * horizon_time_s + cruise_speed_mps**2 / (
-        2.0 * accel_fraction * mu_min * GRAVITY_MPS2)
+        2.0 * braking_fraction * accel_fraction * mu_min * GRAVITY_MPS2)
     grid = coarse[coarse <= s0 + min(reach, MAX_LOOKAHEAD_M) + PROFILE_STEP_M]
     profile = max_speed_profile_mps(
         grid, np.asarray(curvature_of_s(grid), dtype=float) * np.ones_like(grid),
@@ -120,5 +130,6 @@ def curve_speed_reference_mps(
         np.minimum(np.maximum(np.asarray(mu_hat_of_s(grid), dtype=float), 0.05), 2.0),
         accel_fraction,
         cruise_speed_mps,
+        braking_fraction,
     )
     return np.interp(np.asarray(stage_s_m, dtype=float), grid, profile)

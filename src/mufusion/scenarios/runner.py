@@ -66,6 +66,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         backend=cfg.planner.backend,
         use_sampling=cfg.planner.use_sampling,
         curve_speed_reference=cfg.planner.curve_speed_reference,
+        reference_braking_fraction=cfg.planner.reference_braking_fraction,
         steering_rate_limit=cfg.planner.steering_rate_limit,
         load_transfer=cfg.planner.load_transfer,
         lane_d_min_m=lo,
