@@ -164,8 +164,9 @@ class PlannerConfig:
     curve_speed_reference: bool = True
     # Share of the friction the speed reference's braking ramps before a curve assume, in (0, 1]
     # (planner/speed_profile.py): below 1 the reference starts braking earlier than the polygon
-    # requires and keeps the rest as a reserve.
-    reference_braking_fraction: float = 1.0
+    # requires and keeps the rest as a reserve for braking the plans lose at the turn-in
+    # (docs/experiments.md, "A braking reserve in the speed reference").
+    reference_braking_fraction: float = 0.8
     # Plan the front lateral force as a state whose rate the steering's rate limit bounds
     # (planner/front_force.py; beyond the paper, whose forces are free inputs).
     steering_rate_limit: bool = True

@@ -144,10 +144,12 @@ class PlannerSettings(_Strict):
     """Track the highest speed a point mass could hold along the road with μ̂ (curves and
     friction ahead, beyond the horizon) instead of the cruise speed alone
     (``docs/feasibility.md``, "GT at the limit")."""
-    reference_braking_fraction: Annotated[float, Field(gt=0.0, le=1.0)] = 1.0
+    reference_braking_fraction: Annotated[float, Field(gt=0.0, le=1.0)] = 0.8
     """Share of the friction the speed reference's braking ramps before a curve or a lower μ̂
     assume: 1 brakes as late as the friction polygon allows, less starts earlier and keeps the
-    rest as a reserve (the curves' limit speeds are unchanged)."""
+    rest as a reserve (the curves' limit speeds are unchanged). The default 0.8 keeps a fifth
+    of it for the braking that plans lose while they turn in (docs/experiments.md, "A braking
+    reserve in the speed reference")."""
     steering_rate_limit: bool = True
     """Plan the front lateral force as a state whose rate the steering actuator's rate limit
     bounds (:mod:`mufusion.planner.front_force`); ``false``: the forces are free inputs, as in
