@@ -8,7 +8,9 @@ mass could hold along the lane centre with the friction the planner may use (``v
 before a tighter point, braking with ``√(a² − (v²κ)²)``; ``a = λ cos(π/n) μ̂ g``, what an n-sided
 polygon of radius ``λ μ̂ F_z`` grants in pure braking or cornering) asks for a speed the plan can
 keep, sees curves beyond the time horizon (the profile reaches a stopping distance further), and
-leaves the lane's play as a margin.
+leaves the lane's play as a margin. The braking ramps may use only a share of that deceleration
+(``braking_fraction``; the planner's default 0.8), so braking a plan loses before a curve can be
+made up instead of arriving as excess speed.
 """
 
 from __future__ import annotations
