@@ -31,6 +31,8 @@ def _said(result) -> str:
         (["run", "turn", "--set", "perturbation.speed_mps=13"], "perturbation.speed_mps"),
         (["run", "turn", "--set", "planner.reference_braking_fraction=0"],
          "planner.reference_braking_fraction"),
+        (["run", "turn", "--set", "planner.reference_regain_limit=2"],
+         "planner.reference_regain_limit"),
         (["run", "popup", "-c", "F_safe"], "--config must be one of"),
         (["run", "nowhere.toml"], "does not exist"),
     ],

@@ -11,7 +11,11 @@ from hypothesis import strategies as st
 
 from mufusion.planner.ocp import PlannerConfig
 from mufusion.planner.planner import TractionAdaptivePlanner
-from mufusion.planner.speed_profile import curve_speed_reference_mps, max_speed_profile_mps
+from mufusion.planner.speed_profile import (
+    curve_speed_reference_mps,
+    max_speed_profile_mps,
+    regain_limited_profile_mps,
+)
 from mufusion.vehicle.params import GRAVITY_MPS2, TRUCK
 from mufusion.vehicle.planner_model import State
 
@@ -172,3 +176,69 @@ def test_profile_equals_the_textbook_recursion_bit_for_bit(steps, data, end_spee
         expected = _textbook_profile(s, kappa, mu, 0.9, end_speed)
     np.testing.assert_array_equal(max_speed_profile_mps(s, kappa, mu, 0.9, end_speed), expected)
 
+
+def test_regaining_speed_in_a_curve_by_hand() -> None:
+    s = np.array([0.0, 1.0, 2.0])
+    kappa, mu, frac = np.full(3, 1 / 28), np.full(3, 0.9), 0.9 * math.cos(math.pi / 12)
+    v = regain_limited_profile_mps(s, kappa, mu, frac, np.full(3, 14.66), 13.4, 1.5)
+    a = frac * 0.9 * GRAVITY_MPS2  # 7.6762 m/s²
+    share = math.sqrt(1 - (13.4**2 / 28 / a) ** 2)  # 0.5495: the ellipse at 6.41 m/s² lateral
+    assert v[0] == 13.4
+    assert v[1] == pytest.approx(math.sqrt(13.4**2 + 2 * 1.5 * share * 1.0), rel=1e-12)
+    straight = regain_limited_profile_mps(s, np.zeros(3), mu, frac, np.full(3, 14.66), 13.4, 1.5)
+    assert straight[1] == pytest.approx(math.sqrt(13.4**2 + 3.0), rel=1e-12)
+    assert v[2] < straight[2]
+    # At the lateral limit nothing is left to regain speed with.
+    at_limit = regain_limited_profile_mps(s, np.full(3, 1.0), mu, frac, np.full(3, 20.0),
+                                          math.sqrt(a), 1.5)
+    np.testing.assert_allclose(at_limit, math.sqrt(a), rtol=1e-7)  # rounding of v²κ/a at 1
+
+
+@settings(max_examples=100, deadline=None)
+@given(start=st.floats(0.0, 30.0), cap=st.floats(0.1, 3.0),
+       data=st.data(), n=st.integers(2, 60))
+def test_regain_never_exceeds_the_profile_and_starts_at_the_vehicle(start, cap, data, n) -> None:
+    s = np.arange(float(n))
+    kappa = np.array(data.draw(st.lists(st.sampled_from([0.0, 1 / 25, -1 / 60]),
+                                        min_size=n, max_size=n)))
+    mu = np.array(data.draw(st.lists(st.floats(0.05, 1.2), min_size=n, max_size=n)))
+    with np.errstate(divide="ignore"):
+        profile = max_speed_profile_mps(s, kappa, mu, 0.9, 25.0)
+    v = regain_limited_profile_mps(s, kappa, mu, 0.9, profile, start, cap)
+    assert np.all(v <= profile + 1e-12)
+    assert v[0] == pytest.approx(min(start, profile[0]), rel=1e-12)
+    # Each step adds at most what the cap adds on a straight.
+    assert np.all(np.diff(v**2) <= 2.0 * cap * np.diff(s) + 1e-9)
+
+
+def test_regain_rejects_bad_input() -> None:
+    s = np.arange(3.0)
+    with pytest.raises(ValueError, match="start_speed_mps"):
+        regain_limited_profile_mps(s, np.zeros(3), np.ones(3), 0.9, np.ones(3), -1.0, 1.5)
+    with pytest.raises(ValueError, match="max_accel_mps2"):
+        regain_limited_profile_mps(s, np.zeros(3), np.ones(3), 0.9, np.ones(3), 1.0, 0.0)
+
+
+def test_the_cruise_reference_regains_speed_from_the_vehicle_in_a_curve() -> None:
+    lane = dict(lane_d_min_m=-0.35, lane_d_max_m=0.35, use_sampling=False)
+    refs = {}
+    for limit in (True, False):
+        planner = TractionAdaptivePlanner(TRUCK, PlannerConfig(reference_regain_limit=limit,
+                                                               **lane))
+        solve, seen = planner.backend.solve, []
+
+        def spy(*args, _solve=solve, _seen=seen):
+            _seen.append(np.array(args[4][:, State.vx]))  # the tracking reference's speeds
+            return _solve(*args)
+
+        planner._backend.solve = spy
+        x = np.array([ARC_START_M + 5.0, 0.0, 0.0, 12.0 / RADIUS_M, 12.0, 0.0])
+        planner.step(x, 0.0, _curvature, _mu(0.9), [], "cruise", 14.0)
+        refs[limit] = seen[-1]
+    # Without the limit the arc's reference is the cruise speed from the first stage (the arc
+    # holds 14.66 m/s); with it the reference starts at the vehicle's 12 m/s and rises by less
+    # than the cap's 1.5 m/s² would give on a straight over the first stages' distance.
+    assert refs[False][0] == pytest.approx(14.0)
+    assert refs[True][0] == pytest.approx(12.0)
+    assert refs[True][5] < math.sqrt(12.0**2 + 2 * 1.5 * 5 * 0.1 * 12.0)
+    assert np.all(np.diff(refs[True][:20]) >= -1e-12)

@@ -63,14 +63,15 @@ def test_gt_brakes_for_the_arc_on_time_with_the_torque_compensation(direction: s
     # planned, braked in it with the rear tires saturated and left its lane by 73-75 cm
     # (body slip 0.23-0.25 rad). With the lag compensated it keeps the lane (0 cm both ways on
     # this code; 0 and 1.6 cm before the polygons followed the plan's own load transfer).
-    # Measured on a speed reference that brakes as late as the polygon allows, the code the
-    # compensation was made on: with the default braking reserve the truck keeps its lane here
-    # even with the lag uncompensated (last assertion).
+    # Measured on the speed reference the compensation was made on (braking as late as the
+    # polygon allows, regaining speed at once): with the default reference the truck keeps its
+    # lane here even with the lag uncompensated (last assertion).
     variant = [
         "initial_speed_mps=18", "friction.mu_turn=0.9", "turn.start_ahead_m=40",
         f"turn.direction={direction}", "turn.clothoid_m=5", "vehicle=truck",
     ]
-    overrides = [*variant, "planner.reference_braking_fraction=1"]
+    overrides = [*variant, "planner.reference_braking_fraction=1",
+                 "planner.reference_regain_limit=false"]
     m = compute_metrics(run_scenario(load_scenario("turn", overrides=overrides), "GT"))
     assert m.feasibility == "feasible"
     assert m.max_lane_excursion_m < 0.05 and m.max_body_slip_rad < 0.15

@@ -167,6 +167,9 @@ class PlannerConfig:
     # requires and keeps the rest as a reserve for braking the plans lose at the turn-in
     # (docs/experiments.md, "A braking reserve in the speed reference").
     reference_braking_fraction: float = 0.8
+    # The reference regains speed from the vehicle's own no faster than the cruise traction cap
+    # on the g-g ellipse allows (planner/speed_profile.py, ``regain_limited_profile_mps``).
+    reference_regain_limit: bool = True
     # Plan the front lateral force as a state whose rate the steering's rate limit bounds
     # (planner/front_force.py; beyond the paper, whose forces are free inputs).
     steering_rate_limit: bool = True

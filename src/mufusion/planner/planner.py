@@ -296,6 +296,8 @@ class TractionAdaptivePlanner:
                     guess_x[:, State.s], curvature_of_s, mu_of_s, reference_speed_mps,
                     cfg.utilization_factor * np.cos(np.pi / cfg.polygon_sides),
                     cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
+                    (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2)
+                    if cfg.reference_regain_limit and mode == "cruise" else None,
                 )
             stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
                                      cfg.utilization_factor, cfg.stiffness_table)

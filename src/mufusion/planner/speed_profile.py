@@ -105,6 +105,66 @@ def max_speed_profile_mps(
     return np.sqrt(np.array(u))
 
 
+def regain_limited_profile_mps(
+    s_m: np.ndarray,
+    curvature_1pm: np.ndarray,
+    mu: np.ndarray,
+    accel_fraction: float,
+    profile_mps: np.ndarray,
+    start_speed_mps: float,
+    max_accel_mps2: float,
+) -> np.ndarray:
+    """``profile_mps`` capped by how fast a point mass from ``start_speed_mps`` regains speed.
+
+    The forward pass of a speed profile: from the start, each grid step may add speed with
+    ``a_x ≤ max_accel_mps2 · √(1 − (v² |κ| / a)²)``, ``a = accel_fraction · μ g``, the g-g ellipse
+    whose semi-axes are the drive's acceleration cap and the lateral friction (on a straight the
+    whole cap, at the lateral limit nothing). A vehicle below the profile inside a curve is then
+    asked to regain speed only as fast as its cornering leaves friction for it, instead of at
+    once.
+
+    Parameters
+    ----------
+    s_m, curvature_1pm, mu, accel_fraction
+        As for :func:`max_speed_profile_mps` (same grid).
+    profile_mps
+        The backward pass's speeds on the grid, shape (M,) [m/s].
+    start_speed_mps
+        Speed at the first grid point [m/s], ≥ 0.
+    max_accel_mps2
+        The drive's acceleration cap [m/s²], > 0.
+
+    Returns
+    -------
+    ndarray
+        Shape (M,) [m/s], never above ``profile_mps``.
+
+    Examples
+    --------
+    >>> s = np.arange(0.0, 3.0)
+    >>> v = regain_limited_profile_mps(s, np.zeros(3), np.full(3, 0.8), 0.9, np.full(3, 20.0),
+    ...                                10.0, 1.5)
+    >>> [round(float(x), 4) for x in v]  # √(100 + 2·1.5·1), √(103 + 3)
+    [10.0, 10.1489, 10.2956]
+    """
+    if not start_speed_mps >= 0.0 or not max_accel_mps2 > 0.0:
+        raise ValueError("start_speed_mps must be >= 0 and max_accel_mps2 > 0, got "
+                         f"{start_speed_mps!r} and {max_accel_mps2!r}")
+    kappa = np.abs(np.asarray(curvature_1pm, dtype=float)).tolist()
+    accel = (accel_fraction * np.asarray(mu, dtype=float) * GRAVITY_MPS2).tolist()
+    s_list = np.asarray(s_m, dtype=float).tolist()
+    cap = (np.asarray(profile_mps, dtype=float) ** 2).tolist()
+    w = min(start_speed_mps * start_speed_mps, cap[0])
+    out = [w]
+    for i in range(len(cap) - 1):
+        lateral = w * max(kappa[i], kappa[i + 1])
+        ratio = min(lateral / accel[i], 1.0)
+        w = min(cap[i + 1], w + 2.0 * max_accel_mps2 * math.sqrt(1.0 - ratio * ratio)
+                * (s_list[i + 1] - s_list[i]))
+        out.append(w)
+    return np.sqrt(np.array(out))
+
+
 def curve_speed_reference_mps(
     stage_s_m: np.ndarray,
     curvature_of_s: Callable[[np.ndarray], np.ndarray],
@@ -113,12 +173,15 @@ def curve_speed_reference_mps(
     accel_fraction: float,
     horizon_time_s: float,
     braking_fraction: float = 1.0,
+    regain: tuple[float, float] | None = None,
 ) -> np.ndarray:
     """The cruise speed capped by :func:`max_speed_profile_mps` at the stages' positions.
 
     The profile runs from the first stage over the horizon's reach at the cruise speed plus the
     stopping distance from it at the lowest μ̂ ahead (at most :data:`MAX_LOOKAHEAD_M`), so a
-    curve beyond the horizon already lowers the reference of its last stages.
+    curve beyond the horizon already lowers the reference of its last stages. ``regain``
+    ``(start_speed_mps, max_accel_mps2)`` also caps it by :func:`regain_limited_profile_mps`
+    from the vehicle's speed at the first stage.
     """
     s0 = float(stage_s_m[0])
     coarse = s0 + np.arange(0.0, MAX_LOOKAHEAD_M + PROFILE_STEP_M, PROFILE_STEP_M)
@@ -126,12 +189,11 @@ def curve_speed_reference_mps(
     reach = cruise_speed_mps * horizon_time_s + cruise_speed_mps**2 / (
         2.0 * braking_fraction * accel_fraction * mu_min * GRAVITY_MPS2)
     grid = coarse[coarse <= s0 + min(reach, MAX_LOOKAHEAD_M) + PROFILE_STEP_M]
-    profile = max_speed_profile_mps(
-        grid, np.asarray(curvature_of_s(grid), dtype=float) * np.ones_like(grid),
-        # np.clip's values for these non-zero bounds, without its per-call overhead.
-        np.minimum(np.maximum(np.asarray(mu_hat_of_s(grid), dtype=float), 0.05), 2.0),
-        accel_fraction,
-        cruise_speed_mps,
-        braking_fraction,
-    )
+    kappa = np.asarray(curvature_of_s(grid), dtype=float) * np.ones_like(grid)
+    # np.clip's values for these non-zero bounds, without its per-call overhead.
+    mu = np.minimum(np.maximum(np.asarray(mu_hat_of_s(grid), dtype=float), 0.05), 2.0)
+    profile = max_speed_profile_mps(grid, kappa, mu, accel_fraction, cruise_speed_mps,
+                                    braking_fraction)
+    if regain is not None:
+        profile = regain_limited_profile_mps(grid, kappa, mu, accel_fraction, profile, *regain)
     return np.interp(np.asarray(stage_s_m, dtype=float), grid, profile)

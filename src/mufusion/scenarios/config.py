@@ -150,6 +150,10 @@ class PlannerSettings(_Strict):
     rest as a reserve (the curves' limit speeds are unchanged). The default 0.8 keeps a fifth
     of it for the braking that plans lose while they turn in (docs/experiments.md, "A braking
     reserve in the speed reference")."""
+    reference_regain_limit: bool = True
+    """In cruise, the speed reference regains speed from the vehicle's own no faster than the
+    drive's acceleration cap on the g-g ellipse allows (less while cornering); ``false``: the
+    reference jumps back to the profile's speed."""
     steering_rate_limit: bool = True
     """Plan the front lateral force as a state whose rate the steering actuator's rate limit
     bounds (:mod:`mufusion.planner.front_force`); ``false``: the forces are free inputs, as in
