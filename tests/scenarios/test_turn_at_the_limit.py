@@ -84,3 +84,22 @@ def test_gt_brakes_for_the_arc_on_time_with_the_torque_compensation(direction: s
     reserve = compute_metrics(run_scenario(
         load_scenario("turn", overrides=[*variant, "sim.torque_compensation=false"]), "GT"))
     assert reserve.max_lane_excursion_m == 0.0
+
+
+@pytest.mark.parametrize("direction", ["left", "right"])
+def test_gt_leaves_the_arc_in_lane_when_the_reference_regains_speed_on_the_ellipse(
+    direction: str,
+) -> None:
+    # Truck, 14 m/s, μ 0.9, curve 5 m ahead without a clothoid (feasible: the arc holds
+    # 14.66 m/s, so the reference never brakes). Slightly below the cruise speed in the arc, a
+    # reference that jumps back to 14 m/s has the plans drive the rear axle at the whole cap
+    # while cornering; the body slips and the curvature's step at the arc's end leaves a heading
+    # error: the rear corner crossed the lane edge by 8 cm in both directions.
+    overrides = ["initial_speed_mps=14", "friction.mu_turn=0.9", "turn.start_ahead_m=5",
+                 f"turn.direction={direction}", "turn.clothoid_m=0", "vehicle=truck"]
+    m = compute_metrics(run_scenario(load_scenario("turn", overrides=overrides), "GT"))
+    assert m.feasibility == "feasible"
+    assert m.max_lane_excursion_m == 0.0
+    at_once = compute_metrics(run_scenario(load_scenario(
+        "turn", overrides=[*overrides, "planner.reference_regain_limit=false"]), "GT"))
+    assert at_once.max_lane_excursion_m > 0.05
