@@ -10,7 +10,9 @@ polygon of radius ``λ μ̂ F_z`` grants in pure braking or cornering) asks for 
 keep, sees curves beyond the time horizon (the profile reaches a stopping distance further), and
 leaves the lane's play as a margin. The braking ramps may use only a share of that deceleration
 (``braking_fraction``; the planner's default 0.8), so braking a plan loses before a curve can be
-made up instead of arriving as excess speed.
+made up instead of arriving as excess speed. A forward pass from the vehicle's own speed
+(:func:`regain_limited_profile_mps`) lets the reference rise only as fast as the drive's cap on
+the g-g ellipse allows, so a vehicle below it inside a curve is not asked to regain speed at once.
 """
 
 from __future__ import annotations

@@ -16,6 +16,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from mufusion.estimators import ErrorModel
+from mufusion.planner.ocp import PlannerConfig
 from mufusion.planner.safety import SafetySettings
 from mufusion.road import FrictionMap, Obstacle, Road, straight_road, turn_road
 from mufusion.sim.faults import Fault
@@ -144,13 +145,15 @@ class PlannerSettings(_Strict):
     """Track the highest speed a point mass could hold along the road with μ̂ (curves and
     friction ahead, beyond the horizon) instead of the cruise speed alone
     (``docs/feasibility.md``, "GT at the limit")."""
-    reference_braking_fraction: Annotated[float, Field(gt=0.0, le=1.0)] = 0.8
+    # Defaults from their one home, the planner's configuration.
+    reference_braking_fraction: Annotated[float, Field(gt=0.0, le=1.0)] = (
+        PlannerConfig.reference_braking_fraction)
     """Share of the friction the speed reference's braking ramps before a curve or a lower μ̂
     assume: 1 brakes as late as the friction polygon allows, less starts earlier and keeps the
     rest as a reserve (the curves' limit speeds are unchanged). The default 0.8 keeps a fifth
     of it for the braking that plans lose while they turn in (docs/experiments.md, "A braking
     reserve in the speed reference")."""
-    reference_regain_limit: bool = True
+    reference_regain_limit: bool = PlannerConfig.reference_regain_limit
     """In cruise, the speed reference regains speed from the vehicle's own no faster than the
     drive's acceleration cap on the g-g ellipse allows (less while cornering); ``false``: the
     reference jumps back to the profile's speed."""
