@@ -344,3 +344,41 @@ def test_config_validates_the_recovery_settings():
         SafetySettings(mu_floor=0.0)
     with pytest.raises(ValueError, match="corridor_tolerance_m"):
         PlausibilityLimits(corridor_tolerance_m=-1.0)
+
+
+class _RecordingBackend(FaultyBackend):
+    """Passes through and keeps each solve's initial guess."""
+
+    def __init__(self, inner) -> None:
+        super().__init__(inner)
+        self.guesses: list[np.ndarray] = []
+
+    def solve(self, x0, guess_x, *args, **kwargs):
+        self.guesses.append(np.array(guess_x, copy=True))
+        return super().solve(x0, guess_x, *args, **kwargs)
+
+
+def test_restored_memory_is_what_the_next_step_continues():
+    backend = _RecordingBackend(TractionAdaptivePlanner(TRUCK, CONFIG).backend)
+    planner = TractionAdaptivePlanner(TRUCK, CONFIG, backend=backend)
+    adopted = planner.step(X0, 0.0, straight, mu_08, [], "cruise", 15.0)
+    memory = planner.memory
+    assert memory.previous is adopted and memory.consecutive_fallbacks == 0
+    # A candidate for the same instant that fails: it becomes the latest plan and counts.
+    backend.mode = "status4"
+    failed = planner.step(X0, 0.0, straight, mu_08, [], "cruise", 15.0)
+    assert failed.fallback and planner.last_plan is failed and planner.consecutive_fallbacks == 1
+    planner.restore(memory)
+    assert planner.last_plan is adopted and planner.consecutive_fallbacks == 0
+    # A candidate that succeeds with another plan (it brakes to 10 m/s), not adopted.
+    backend.mode = "none"
+    other = planner.step(X0, 0.0, straight, mu_08, [], "cruise", 10.0)
+    assert planner.last_plan is other
+    assert np.abs(other.states[2:, State.s] - adopted.states[2:, State.s]).max() > 1.0
+    planner.restore(memory)
+    # The next step's guess is the adopted plan shifted by one stage, from the new state on.
+    x1 = adopted.states[1].copy()
+    planner.step(x1, 0.1, straight, mu_08, [], "cruise", 15.0)
+    guess = backend.guesses[-1]
+    np.testing.assert_array_equal(guess[0], x1)
+    np.testing.assert_array_equal(guess[1:-1], adopted.states[2:])

@@ -4,7 +4,7 @@ from mufusion.planner.backend import PlannerBackend
 from mufusion.planner.controller import ControllerGains, TrackingController
 from mufusion.planner.ocp import CostWeights, PlannerConfig, PlannerObstacle, PlausibilityLimits
 from mufusion.planner.plan import FallbackReason, Plan
-from mufusion.planner.planner import TractionAdaptivePlanner
+from mufusion.planner.planner import PlannerMemory, TractionAdaptivePlanner
 from mufusion.planner.sampling import SamplingConfig
 
 __all__ = [
@@ -14,6 +14,7 @@ __all__ = [
     "Plan",
     "PlannerBackend",
     "PlannerConfig",
+    "PlannerMemory",
     "PlannerObstacle",
     "PlausibilityLimits",
     "SamplingConfig",

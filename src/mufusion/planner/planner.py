@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -60,6 +61,7 @@ __all__ = [
     "FallbackReason",
     "Plan",
     "PlannerConfig",
+    "PlannerMemory",
     "PlannerObstacle",
     "TractionAdaptivePlanner",
     "rollout",
@@ -75,6 +77,19 @@ def rollout(
     for k in range(inputs.shape[0]):
         xs.append(rk4_step(xs[-1], inputs[k], curvature[k], rear_stiffness[k], params, dt_s))
     return np.stack(xs)
+
+
+@dataclass(frozen=True)
+class PlannerMemory:
+    """What a planning step hands to the next: the plan the next guess continues (shifted), the
+    sanitised μ̂ profile that stands in for invalid estimates, and the count of fallback steps in
+    a row. A caller that plans several candidates for one step (lane recovery) restores the
+    memory of the candidate it adopts, so the next step continues the plan that is executed.
+    """
+
+    previous: Plan | None
+    mu_profile: FrictionProfile | None
+    consecutive_fallbacks: int
 
 
 def _default_backend(params: VehicleParams, config: PlannerConfig) -> PlannerBackend:
@@ -137,6 +152,21 @@ class TractionAdaptivePlanner:
     def last_plan(self) -> Plan | None:
         """The latest plan (the next step's warm start), or ``None`` after :meth:`reset`."""
         return self._prev
+
+    @property
+    def memory(self) -> PlannerMemory:
+        """What the next :meth:`step` continues from (see :class:`PlannerMemory`)."""
+        return PlannerMemory(self._prev, self._mu_profile, self._consecutive_fallbacks)
+
+    def restore(self, memory: PlannerMemory) -> None:
+        """Continue from ``memory`` (taken from :attr:`memory`) instead of the latest step.
+
+        The solver's own warm start (its multipliers) is not part of it: it moves only where the
+        next QP's interior-point iterations start, not (beyond the QP's tolerance) their end.
+        """
+        self._prev = memory.previous
+        self._mu_profile = memory.mu_profile
+        self._consecutive_fallbacks = memory.consecutive_fallbacks
 
     def reset(self) -> None:
         """Forget the warm start, the last friction profile and the failure counters, and

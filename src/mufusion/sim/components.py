@@ -16,7 +16,7 @@ from typing import Protocol
 import numpy as np
 
 from mufusion.configurations import FrictionEstimate
-from mufusion.planner import Plan, PlannerObstacle
+from mufusion.planner import Plan, PlannerMemory, PlannerObstacle
 from mufusion.planner.ocp import PlannerMode
 from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.plant import PlantOutput, PlantStateVector
@@ -114,6 +114,14 @@ class Planner(Protocol):
         lane_d_min_m: float | None = None,
         lane_d_max_m: float | None = None,
     ) -> Plan: ...
+
+    @property
+    def memory(self) -> PlannerMemory:
+        """What the next ``step`` continues from."""
+        ...
+
+    def restore(self, memory: PlannerMemory) -> None:
+        """Continue from ``memory`` instead of the latest step (lane recovery's candidates)."""
 
 
 class Controller(Protocol):

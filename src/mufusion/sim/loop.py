@@ -285,17 +285,23 @@ class ClosedLoop:
         # No friction-limited plan at all (the solve failed) counts as not keeping the lane.
         if before <= tolerance and not plan.fallback:
             return plan, estimate
-        best = (np.inf if plan.fallback else before, plan, estimate, 0.0)
+        # Each candidate starts from the one before (a continuation in α: the later candidates
+        # have had more iterations), and the next step continues the plan adopted: the planner
+        # keeps its latest plan as the next warm start (and that plan's front force as where
+        # the next plan's force starts), which after the search would be the last candidate
+        # tried, not the one the controller tracks.
+        best = (np.inf if plan.fallback else before, plan, estimate, 0.0, self.planner.memory)
         for alpha in self.lane_recovery.steps:
             relaxed = relaxed_estimate(estimate, alpha)
             assert relaxed is not None
             candidate = self._plan(xf, t, s_ego, relaxed, obstacles, mode)
             violation = self._footprint_violation_m(candidate)
             if not candidate.fallback and violation < best[0]:
-                best = (violation, candidate, relaxed, alpha)
+                best = (violation, candidate, relaxed, alpha, self.planner.memory)
             if not candidate.fallback and violation <= tolerance:
                 break
-        violation, plan, estimate, alpha = best
+        violation, plan, estimate, alpha, memory = best
+        self.planner.restore(memory)
         problem = "no friction-limited plan" if not np.isfinite(best[0]) and alpha == 0.0 else (
             "the friction-limited plan failed" if alpha > 0.0 and before <= tolerance
             else f"the plan left the lane by {before:.2f} m"

@@ -18,11 +18,13 @@ probe's cost; it also helps, as the vehicle arrives slower.
 vehicle within its lane (the plan's own predicted footprint, :func:`planned_footprint_violation_m`,
 leaves the band the planner keeps the body in by more than ``violation_tolerance_m``), the
 planner plans again with μ̂ relaxed towards the posterior mean, ``μ̂ + α (mean − μ̂)`` for the
-smallest ``α`` of ``steps`` that keeps the lane (the least violating if none does): the guarantee
-of the lower bound is given up only as far as needed to stay on the road, and only with a
-posterior (F, F-safe). The footprint's corners are checked, not the reference point alone: on a
-curve and yawed against the lane the corners reach up to the body's swing and bulge further out,
-and a plan whose reference point stays within its bounds can still carry the body over the edge.
+smallest ``α`` of ``steps`` that keeps the lane (the least violating if none does; the candidates
+in increasing ``α``, each from the one before, and the next step continues the one adopted):
+the guarantee of the lower bound is given up only as far as needed to stay on the road, and
+only with a posterior (F, F-safe). The footprint's corners are checked, not the reference
+point alone: on a curve and yawed against the lane the corners reach up to the body's swing and
+bulge further out, and a plan whose reference point stays within its bounds can still carry
+the body over the edge.
 """
 
 from __future__ import annotations
