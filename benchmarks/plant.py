@@ -1,4 +1,5 @@
-"""Plant integration speed: 10 s at 200 Hz, against CommonRoad's STD model in the same run.
+"""Plant integration speed: 10 s at 200 Hz, against CommonRoad's STD model in the same run, and
+the compiled plant kernel against the Python one (bitwise the same steps).
 
 Run: ``python benchmarks/plant.py``. Prints wall times and ratios; numbers go to
 docs/performance.md, section "## Plant".
@@ -17,6 +18,7 @@ from vehiclemodels.vehicle_dynamics_std import vehicle_dynamics_std
 from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.params import CAR, TRUCK
 from mufusion.vehicle.plant import Plant, initial_state, plant_derivative
+from mufusion.vehicle.plant_kernel import compiled_kernel_available
 
 DT_S = 1.0 / 200.0
 STEPS = 2000  # 10 s
@@ -32,8 +34,8 @@ def _best(fn) -> float:
     return min(times)
 
 
-def run_plant(params) -> None:
-    plant = Plant(params, initial_state(params, 0.0, 0.0, 0.0, 15.0), DT_S)
+def run_plant(params, kernel: str = "auto") -> None:
+    plant = Plant(params, initial_state(params, 0.0, 0.0, 0.0, 15.0), DT_S, kernel=kernel)
     for k in range(STEPS):
         t = k * DT_S
         brake = -2_000.0 * params.mass_kg / 1000.0 if t > 5.0 else 0.0
@@ -61,11 +63,17 @@ def run_std(substeps: int) -> None:
 def main() -> None:
     print(f"10 s at {1 / DT_S:.0f} Hz ({STEPS} steps), best of {REPEATS}")
     ours = {}
+    kinds = ("compiled", "python") if compiled_kernel_available() else ("python",)
     for params in (TRUCK, CAR):
-        ours[params.name] = _best(lambda params=params: run_plant(params))
-        per_step = ours[params.name] / STEPS * 1e6
-        print(f"  mufusion Plant ({params.name}, RK4 + implicit wheels): "
-              f"{ours[params.name]:.3f} s  ({per_step:.1f} µs/step)")
+        for kind in kinds:
+            ours[params.name, kind] = _best(lambda p=params, k=kind: run_plant(p, k))
+            per_step = ours[params.name, kind] / STEPS * 1e6
+            print(f"  mufusion Plant ({params.name}, RK4 + implicit wheels, {kind} kernel): "
+                  f"{ours[params.name, kind]:.3f} s  ({per_step:.1f} µs/step)")
+        if len(kinds) == 2:
+            print(f"  ratio compiled / python kernel ({params.name}): "
+                  f"{ours[params.name, 'compiled'] / ours[params.name, 'python']:.2f}")
+    ours["car"] = ours["car", kinds[0]]
     std_1 = _best(lambda: run_std(1))
     std_5 = _best(lambda: run_std(5))
     print(f"  CommonRoad STD, RK4 1 step per 5 ms:  {std_1:.3f} s  "

@@ -3,7 +3,10 @@
 The reference below is the obvious loop: the public model functions called on fresh arrays, the
 RK4 written as the formula, the trajectories stacked at the end. Compared through the bit patterns
 (``-0.0`` ≠ ``0.0``, NaN payloads count), on random states, targets, curvature and μ̂ profiles, with
-the fixed rear tire and with the stiffness table.
+the fixed rear tire and with the stiffness table. The compiled loop is held to the same bits
+except a NaN's sign and payload (a C compiler may rewrite ``-0.8 * x`` as ``-(0.8 * x)`` or
+return either NaN of two operands): NaN appears exactly where the reference has one; those
+candidates diverged and the planner discards them.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from mufusion.planner.sampling import (
     RK4Workspace,
     SamplingConfig,
     candidate_rollouts,
+    compiled_rollouts_available,
     rk4_step,
     steering_force_n,
 )
@@ -41,6 +45,17 @@ N, DT_S = 40, 0.1
 
 def _bits(a: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.float64).view(np.uint64)
+
+
+def _same(got: np.ndarray, want: np.ndarray, kind: str) -> bool:
+    """Bitwise equal; for the compiled loop, every NaN counted as one NaN."""
+    if kind == "numpy":
+        return np.array_equal(_bits(got), _bits(want))
+    canonical = [np.where(np.isnan(a), np.nan, a) for a in (got, want)]
+    return np.array_equal(_bits(canonical[0]), _bits(canonical[1]))
+
+
+KINDS = ["numpy", "compiled"]
 
 
 def _reference_rk4(x, u, kappa, c_r, params, dt_s):
@@ -118,26 +133,27 @@ TABLES = [None, AUTHORS_TIRES, AUTHORS_TIRES_INTERPOLATED]
 @pytest.mark.filterwarnings("error")  # not even an ignored warning in the hot loop
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("table", TABLES, ids=["fixed-tire", "table-step", "table-linear"])
-def test_rollouts_are_bitwise_the_straightforward_evaluation(seed: int, table) -> None:
+@pytest.mark.parametrize("kind", KINDS)
+def test_rollouts_are_bitwise_the_straightforward_evaluation(seed: int, table, kind: str) -> None:
     x0, lateral, speeds, curvature_of_s, mu_hat_of_s = _random_case(seed)
     params = TRUCK if seed % 2 == 0 else CAR
     lam = (0.9, 0.8, 0.75)[seed % 3]
     config = SamplingConfig()
     with np.errstate(all="ignore"):
         xs, us = candidate_rollouts(x0, lateral, speeds, curvature_of_s, mu_hat_of_s, params,
-                                    lam, N, DT_S, config, stiffness_table=table)
+                                    lam, N, DT_S, config, stiffness_table=table, kind=kind)
         ref_x, ref_u = _reference_rollouts(x0, lateral, speeds, curvature_of_s, mu_hat_of_s,
                                            params, lam, config, table)
     m_count = lateral.size * speeds.size
     assert xs.shape == (N + 1, N_STATES, m_count) and us.shape == (N, N_INPUTS, m_count)
-    assert np.array_equal(_bits(xs), _bits(ref_x))
-    assert np.array_equal(_bits(us), _bits(ref_u))
+    assert _same(xs, ref_x, kind) and _same(us, ref_u, kind)
     # The candidates do move apart (the comparison is not of constants).
     final_d = xs[-1, State.d][np.isfinite(xs[-1, State.d])]
     assert final_d.size >= m_count // 2 and np.ptp(final_d) > 0.1
 
 
-def test_scalar_profiles_and_non_finite_mu_are_bitwise_too() -> None:
+@pytest.mark.parametrize("kind", KINDS)
+def test_scalar_profiles_and_non_finite_mu_are_bitwise_too(kind: str) -> None:
     """A path answering one curvature for all candidates; μ̂ NaN beyond a point (a diverged or
     far candidate: the stiffness falls back, the limits go NaN)."""
     x0, lateral, speeds, _, _ = _random_case(11)
@@ -149,11 +165,11 @@ def test_scalar_profiles_and_non_finite_mu_are_bitwise_too() -> None:
     with np.errstate(all="ignore"):
         for table in (None, AUTHORS_TIRES):
             args = (x0, lateral, speeds, lambda s: 0.01, mu_hat_of_s, TRUCK, 0.9)
-            xs, us = candidate_rollouts(*args, N, DT_S, SamplingConfig(), stiffness_table=table)
+            xs, us = candidate_rollouts(*args, N, DT_S, SamplingConfig(), stiffness_table=table,
+                                        kind=kind)
             ref_x, ref_u = _reference_rollouts(*args, SamplingConfig(), table)
             assert np.isnan(xs).any()
-            assert np.array_equal(_bits(xs), _bits(ref_x))
-            assert np.array_equal(_bits(us), _bits(ref_u))
+            assert _same(xs, ref_x, kind) and _same(us, ref_u, kind)
 
 
 @pytest.mark.parametrize("batch", [(), (7,), (3, 5)])
@@ -185,3 +201,15 @@ def test_dynamics_into_a_buffer_is_bitwise_the_allocating_call() -> None:
     got = frenet_bicycle_dynamics(x, u, kappa, c_r, TRUCK, out=out)
     assert got is out
     assert np.array_equal(_bits(out), _bits(frenet_bicycle_dynamics(x, u, kappa, c_r, TRUCK)))
+
+
+def test_the_install_built_the_compiled_rollouts() -> None:
+    # `pip install -e .` compiles the loop; without it sampling silently takes the slower path.
+    assert compiled_rollouts_available()
+
+
+def test_an_unknown_rollout_kind_is_refused_by_name() -> None:
+    x0, lateral, speeds, curvature_of_s, mu_hat_of_s = _random_case(0)
+    with pytest.raises(ValueError, match="kind must be one of auto, compiled, numpy"):
+        candidate_rollouts(x0, lateral, speeds, curvature_of_s, mu_hat_of_s, CAR, 0.9, N, DT_S,
+                           SamplingConfig(), kind="fast")

@@ -1,8 +1,9 @@
-"""The plant's float kernel computes bitwise what the reference functions compute.
+"""The plant's float kernels compute bitwise what the reference functions compute.
 
 The reference step below is the plant's scheme written with the record-based functions
 (:func:`axle_outputs`, :func:`_chassis_rates`, :func:`tire_forces_scalar`), as the plant
-evaluated it before the kernel; the kernel must reproduce it exactly, not approximately.
+evaluated it before the kernel; both kernels (Python and compiled) must reproduce it exactly,
+not approximately.
 """
 
 from __future__ import annotations
@@ -16,7 +17,13 @@ from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.axles import axle_outputs, wheel_speeds
 from mufusion.vehicle.params import CAR, TRUCK, VehicleParams
 from mufusion.vehicle.plant import Plant, _chassis_rates, initial_state
-from mufusion.vehicle.plant_kernel import PlantKernel, loaded_tire_fx, unit_tire
+from mufusion.vehicle.plant_kernel import (
+    PlantKernel,
+    compiled_kernel_available,
+    loaded_tire_fx,
+    make_kernel,
+    unit_tire,
+)
 from mufusion.vehicle.plant_state import PlantStateVector, state_vector
 from mufusion.vehicle.surface_tires import AUTHORS_TIRES, SurfaceTireTable, tire_for_surface
 from mufusion.vehicle.tires import tire_forces_scalar
@@ -109,11 +116,14 @@ def test_kernel_tires_equal_the_reference_bitwise() -> None:
             kappa, alpha, fz, mu, CAR.tire)[0]
 
 
+@pytest.mark.parametrize("kernel", ["python", "compiled"])
 @pytest.mark.parametrize("table", [None, AUTHORS_TIRES])
-def test_plant_steps_equal_the_reference_scheme_bitwise(table: SurfaceTireTable | None) -> None:
+def test_plant_steps_equal_the_reference_scheme_bitwise(
+    table: SurfaceTireTable | None, kernel: str
+) -> None:
     # Steering, traction, braking to a standstill (wheels lock and are held), μ changing.
     x = initial_state(TRUCK, 5.0, -2.0, 0.4, 14.0)
-    plant = Plant(TRUCK, x, DT_S, surface_tires=table)
+    plant = Plant(TRUCK, x, DT_S, surface_tires=table, kernel=kernel)
     reference = state_vector(x)
     for k in range(2800):
         t = k * DT_S
@@ -133,3 +143,38 @@ def test_plant_steps_equal_the_reference_scheme_bitwise(table: SurfaceTireTable 
                             tire_for_surface(mu_r, TRUCK.tire, table))
         assert (out.front, out.rear) == want
     assert plant.state.vx_mps < 0.5 and plant.state.omega_rear_radps == 0.0
+
+
+def test_the_install_built_the_compiled_kernel() -> None:
+    # `pip install -e .` compiles it; without it every run silently takes the slower path.
+    assert compiled_kernel_available()
+    assert type(Plant(CAR, initial_state(CAR, 0.0, 0.0, 0.0, 5.0))._kernel) is not PlantKernel
+
+
+@pytest.mark.parametrize("params", [TRUCK, CAR], ids=lambda p: p.name)
+@pytest.mark.parametrize("table", [None, AUTHORS_TIRES])
+def test_compiled_kernel_steps_equal_the_python_kernel_bitwise(
+    params: VehicleParams, table: SurfaceTireTable | None
+) -> None:
+    # Random states far from the test drive above: sliding, yawing, locked wheels, drive and
+    # brake torques, each μ on its own; the first stage's axles both computed and handed in.
+    rng = np.random.default_rng(11)
+    python, compiled = make_kernel(params, DT_S, "python"), make_kernel(params, DT_S, "compiled")
+    for x in _random_states(rng, 400):
+        mu_f, mu_r = rng.uniform(0.1, 1.2, 2).tolist()
+        tires = (tire_for_surface(mu_f, params.tire, table),
+                 tire_for_surface(mu_r, params.tire, table))
+        command = (float(rng.uniform(-0.3, 0.3)), *rng.normal(0.0, 5000.0, 2).tolist())
+        speeds = python.wheel_speeds(x.vx_mps, x.vy_mps, x.yaw_rate_radps, x.steer_rad)
+        first = python.axles(speeds, x.omega_front_radps, x.omega_rear_radps, mu_f, mu_r, *tires)
+        chassis = tuple(x[:6] + x[8:])
+        for given in (None, first):
+            args = (chassis, x.omega_front_radps, x.omega_rear_radps, command, mu_f, mu_r,
+                    *tires, given)
+            # repr: exact digits and the sign of zero, not just ==
+            assert repr(compiled.step(*args)) == repr(python.step(*args))
+
+
+def test_an_unknown_kernel_is_refused_by_name() -> None:
+    with pytest.raises(ValueError, match="kernel must be one of auto, compiled, python"):
+        Plant(CAR, initial_state(CAR, 0.0, 0.0, 0.0, 5.0), kernel="fast")

@@ -15,8 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.planner.ocp import PlannerObstacle, longitudinal_force_bounds_n
-from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
+    MIN_SPEED_FOR_SLIP_MPS,
     N_INPUTS,
     N_STATES,
     Input,
@@ -184,6 +185,37 @@ def _per_candidate(value: np.ndarray | float, m_count: int) -> np.ndarray:
     return array if array.shape == (m_count,) else array * np.ones(m_count)
 
 
+def compiled_rollouts_available() -> bool:
+    """Whether the install built the compiled roll-out loop (``_rollouts_c``)."""
+    try:
+        from mufusion.planner._rollouts_c import rollouts  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+ROLLOUT_KINDS = ("auto", "compiled", "numpy")
+
+
+def _rollout_constants(
+    params: VehicleParams, utilization_factor: float, dt_s: float, config: SamplingConfig
+) -> tuple[float, ...]:
+    """The Python floats the numpy roll-out computes with, computed as it computes them, in the
+    order the compiled loop reads them."""
+    m, lf, lr = params.mass_kg, params.cog_to_front_axle_m, params.cog_to_rear_axle_m
+    iz = params.yaw_inertia_kgm2
+    share_front = lr / params.wheelbase_m
+    lower, upper = longitudinal_force_bounds_n(params)
+    return (
+        m, lf, lr, iz, MIN_SPEED_FOR_SLIP_MPS,
+        GRAVITY_MPS2 * lr, GRAVITY_MPS2 * lf, params.cog_height_m, params.wheelbase_m,
+        share_front, share_front * m, iz / lf * config.yaw_rate_gain_1_per_s,
+        m * config.speed_gain_1_per_s, config.min_lookahead_m, config.lookahead_time_s,
+        config.heading_gain_1_per_s, float(lower[0]), float(lower[1]), float(upper[0]),
+        float(upper[1]), utilization_factor, dt_s,
+    )
+
+
 def candidate_rollouts(
     x0: np.ndarray,
     lateral_targets_m: np.ndarray,
@@ -196,23 +228,54 @@ def candidate_rollouts(
     dt_s: float,
     config: SamplingConfig,
     stiffness_table: SurfaceTireTable | None = None,
+    kind: str = "auto",
 ) -> tuple[np.ndarray, np.ndarray]:
     """Roll out every (lateral target, speed target) pair.
 
     ``stiffness_table``: the rear stiffness follows μ̂ through it, as in the OCP (``None``: the
-    vehicle's fixed tire).
+    vehicle's fixed tire). ``kind``: ``"numpy"`` steps all candidates with numpy arrays,
+    ``"compiled"`` with the compiled loop (the same values, bit for bit, at a fraction of the
+    time), ``"auto"`` (default) the compiled loop where the install built it.
 
     Returns
     -------
     states, inputs
         ``(N+1, 6, M)`` and ``(N, 3, M)`` with ``M = len(lateral) × len(speed)``.
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is unknown, or ``"compiled"`` where the loop was not built.
     """
+    if kind not in ROLLOUT_KINDS:
+        raise ValueError(f"kind must be one of {', '.join(ROLLOUT_KINDS)}; got {kind!r}")
+    compiled = kind == "compiled" or (kind == "auto" and compiled_rollouts_available())
     d_t, v_t = (a.ravel() for a in np.meshgrid(lateral_targets_m, speed_targets_mps))
     m_count = d_t.size
     # Trajectories are written in place: each step's state and inputs are rows of these.
     xs = np.empty((horizon_steps + 1, N_STATES, m_count))
     us = np.empty((horizon_steps, N_INPUTS, m_count))
     xs[0] = np.asarray(x0, dtype=float)[:, None]
+    if compiled:
+        try:
+            from mufusion.planner._rollouts_c import rollouts
+        except ImportError as exc:
+            raise ValueError(
+                "kind='compiled' needs the compiled roll-out loop, which this installation "
+                "lacks (reinstall with `pip install -e .`)"
+            ) from exc
+
+        def stiffness_of(rear_load_n: np.ndarray, mu: np.ndarray) -> np.ndarray:
+            return rear_cornering_stiffness_n_per_rad(
+                params, rear_load_n, utilization_factor, mu_hat=mu, table=stiffness_table
+            )
+
+        rollouts(
+            xs, us, np.ascontiguousarray(d_t, dtype=float),
+            np.ascontiguousarray(v_t, dtype=float), curvature_of_s, mu_hat_of_s, stiffness_of,
+            _rollout_constants(params, utilization_factor, dt_s, config),
+        )
+        return xs, us
     workspace = RK4Workspace.for_states(xs[0].shape)
     lower, upper = longitudinal_force_bounds_n(params)
     m = params.mass_kg

@@ -37,7 +37,7 @@ from mufusion.vehicle.axles import (
     check_mu,
 )
 from mufusion.vehicle.params import TireParams, VehicleParams
-from mufusion.vehicle.plant_kernel import AxleFloats, PlantKernel
+from mufusion.vehicle.plant_kernel import KERNEL_KINDS, AxleFloats, make_kernel
 from mufusion.vehicle.plant_state import (
     N_PLANT_STATES,
     PlantState,
@@ -248,16 +248,21 @@ class Plant:
         A table (e.g. :data:`~mufusion.vehicle.surface_tires.AUTHORS_TIRES`): each axle's tire
         follows the true μ under that axle at every step, wherever that axle's forces are
         evaluated (the RK4 stages, the implicit wheel step's tangent stiffness, the output).
+    kernel
+        ``"auto"`` (default): the compiled kernel where the install built it, else the Python
+        one; ``"compiled"`` or ``"python"`` to choose (same results, bit for bit).
 
     Raises
     ------
     ValueError
-        If ``dt_s`` is not in (0, 1/200] or ``x0`` has the wrong shape.
+        If ``dt_s`` is not in (0, 1/200], ``x0`` has the wrong shape or ``kernel`` is unknown
+        (or ``"compiled"`` where it was not built).
 
     Notes
     -----
-    The step's arithmetic runs in :mod:`mufusion.vehicle.plant_kernel`, which reads the
-    vehicle's constants and ``dt_s`` once, here.
+    The step's arithmetic runs in :mod:`mufusion.vehicle.plant_kernel` (or its compiled twin,
+    :func:`~mufusion.vehicle.plant_kernel.make_kernel`), which reads the vehicle's constants and
+    ``dt_s`` once, here.
 
     Examples
     --------
@@ -274,7 +279,10 @@ class Plant:
         x0: np.ndarray,
         dt_s: float = DEFAULT_DT_S,
         surface_tires: SurfaceTireTable | None = None,
+        kernel: str = "auto",
     ) -> None:
+        if kernel not in KERNEL_KINDS:
+            raise ValueError(f"kernel must be one of {', '.join(KERNEL_KINDS)}; got {kernel!r}")
         if not (0.0 < dt_s <= DEFAULT_DT_S + 1e-12):
             raise ValueError(f"dt_s must be in (0, {DEFAULT_DT_S}] s, got {dt_s!r}")
         if surface_tires is not None and not isinstance(surface_tires, SurfaceTireTable):
@@ -286,7 +294,7 @@ class Plant:
         self.dt_s = float(dt_s)
         self._x = state_vector(x0)
         self.time_s = 0.0
-        self._kernel = PlantKernel(params, self.dt_s)
+        self._kernel = make_kernel(params, self.dt_s, kernel)
         # (μ_f, μ_r, tire_f, tire_r, axles) of the latest output, reused by the next step's
         # first stage.
         self._last_axles: (
@@ -342,36 +350,20 @@ class Plant:
             last[2] is tire_f and last[3] is tire_r
         ):
             first = last[4]
-        kernel = self._kernel
-        chassis, u_f0, u_r0 = kernel.chassis_step(
+        values, axles, cos_d, sin_d = self._kernel.step(
             x0[:6] + x0[8:], omega_f0, omega_r0, cmd, mu_front, mu_rear, tire_f, tire_r, first
         )
-        omega_f, omega_r = kernel.implicit_wheels(
-            chassis, omega_f0, omega_r0, u_f0, u_r0, mu_front, mu_rear, tire_f, tire_r
-        )
-        x1 = PlantStateVector._make([*chassis[:6], omega_f, omega_r, *chassis[6:]])
+        x1 = PlantStateVector._make(values)
         self._x = x1
         self.time_s += self.dt_s
-        return self._output(x1, mu_front, mu_rear, tire_f, tire_r)
-
-    def _output(
-        self, x: PlantStateVector, mu_f: float, mu_r: float, tire_f: TireParams,
-        tire_r: TireParams,
-    ) -> PlantOutput:
-        kernel = self._kernel
-        speeds = kernel.wheel_speeds(x.vx_mps, x.vy_mps, x.yaw_rate_radps, x.steer_rad)
-        axles = kernel.axles(
-            speeds, x.omega_front_radps, x.omega_rear_radps, mu_f, mu_r, tire_f, tire_r
-        )
         self._last_axles = (
-            (mu_f, mu_r, tire_f, tire_r, axles)
-            if x.omega_front_radps > 0.0 and x.omega_rear_radps > 0.0 else None
+            (mu_front, mu_rear, tire_f, tire_r, axles)
+            if x1.omega_front_radps > 0.0 and x1.omega_rear_radps > 0.0 else None
         )
-        front, rear = AxleOutput(*axles[0], mu_f), AxleOutput(*axles[1], mu_r)
-        cos_d, sin_d = speeds[4], speeds[5]
-        m = self.params.mass_kg
+        front, rear = AxleOutput(*axles[0], mu_front), AxleOutput(*axles[1], mu_rear)
+        m = p.mass_kg
         return PlantOutput(
-            x=np.asarray(x),
+            x=np.asarray(x1),
             time_s=self.time_s,
             front=front,
             rear=rear,

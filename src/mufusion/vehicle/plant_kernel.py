@@ -14,6 +14,7 @@ signed zeros included, without a built-in call).
 from __future__ import annotations
 
 import math
+from typing import Literal, Protocol, get_args
 
 from mufusion.vehicle.axles import SLIP_SPEED_FLOOR_MPS
 from mufusion.vehicle.params import GRAVITY_MPS2, TireParams, VehicleParams
@@ -28,6 +29,34 @@ _atan, _sin, _cos, _sqrt = math.atan, math.sin, math.cos, math.sqrt
 # Per axle, in this order: F_x, F_y [N] (wheel frame), F_z [N], κ, α [rad], realised and
 # requested utilisation (0 on an unloaded axle), wheel-centre speed along the wheel [m/s].
 AxleFloats = tuple[float, float, float, float, float, float, float, float]
+
+# Which implementation steps the plant: "compiled" (the Cython twin in _plant_kernel_c, built by
+# the install), "python" (this module) or "auto" (compiled where it was built).
+KernelKind = Literal["auto", "compiled", "python"]
+KERNEL_KINDS: tuple[str, ...] = get_args(KernelKind)
+
+# What one plant step returns: the new state (PlantStateVector's layout), the axles there, and
+# the steering angle's cosine and sine there.
+StepResult = tuple[tuple[float, ...], tuple[AxleFloats, AxleFloats], float, float]
+
+
+class Kernel(Protocol):
+    """What :class:`~mufusion.vehicle.plant.Plant` needs of a kernel (either implementation)."""
+
+    def step(
+        self,
+        chassis0: tuple[float, ...],
+        omega_f0: float,
+        omega_r0: float,
+        command: tuple[float, float, float],
+        mu_f: float,
+        mu_r: float,
+        tire_f: TireParams,
+        tire_r: TireParams,
+        first_axles: tuple[AxleFloats, AxleFloats] | None,
+    ) -> StepResult:
+        """See :meth:`PlantKernel.step`."""
+        ...
 
 
 def unit_tire(
@@ -296,3 +325,67 @@ class PlantKernel:
             else:
                 new.append(0.0)
         return new[0], new[1]
+
+    def step(
+        self,
+        chassis0: tuple[float, ...],
+        omega_f0: float,
+        omega_r0: float,
+        command: tuple[float, float, float],
+        mu_f: float,
+        mu_r: float,
+        tire_f: TireParams,
+        tire_r: TireParams,
+        first_axles: tuple[AxleFloats, AxleFloats] | None,
+    ) -> StepResult:
+        """One plant step: the chassis's RK4 step, the wheels' implicit step, the new axles.
+
+        Parameters are those of :meth:`chassis_step`. Returns the new plant state as the
+        :class:`~mufusion.vehicle.plant_state.PlantStateVector` layout (11 floats), the axles at
+        it (with the new wheel spins) and the steering angle's cosine and sine there.
+        """
+        chassis, u_f0, u_r0 = self.chassis_step(
+            chassis0, omega_f0, omega_r0, command, mu_f, mu_r, tire_f, tire_r, first_axles
+        )
+        omega_f, omega_r = self.implicit_wheels(
+            chassis, omega_f0, omega_r0, u_f0, u_r0, mu_f, mu_r, tire_f, tire_r
+        )
+        speeds = self.wheel_speeds(chassis[3], chassis[4], chassis[5], chassis[6])
+        axles = self.axles(speeds, omega_f, omega_r, mu_f, mu_r, tire_f, tire_r)
+        return (*chassis[:6], omega_f, omega_r, *chassis[6:]), axles, speeds[4], speeds[5]
+
+
+def compiled_kernel_available() -> bool:
+    """Whether the compiled kernel was built (``pip install`` compiles it; a bare source tree
+    has only this module)."""
+    try:
+        from mufusion.vehicle._plant_kernel_c import CompiledPlantKernel  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def make_kernel(params: VehicleParams, dt_s: float, kind: str = "auto") -> Kernel:
+    """The plant's kernel for one vehicle: a :class:`PlantKernel` or its compiled twin.
+
+    Both give bitwise the same steps (``tests/vehicle/test_plant_kernel.py``); the compiled one
+    takes a fraction of the time. ``kind`` is one of :data:`KERNEL_KINDS`.
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is unknown, or ``"compiled"`` and the compiled kernel was not built.
+    """
+    if kind not in KERNEL_KINDS:
+        raise ValueError(f"kernel must be one of {', '.join(KERNEL_KINDS)}; got {kind!r}")
+    kernel = PlantKernel(params, dt_s)
+    if kind == "python" or (kind == "auto" and not compiled_kernel_available()):
+        return kernel
+    try:
+        from mufusion.vehicle._plant_kernel_c import CompiledPlantKernel
+    except ImportError as exc:
+        raise ValueError(
+            "kernel='compiled' needs the compiled plant kernel, which this installation lacks "
+            "(reinstall with `pip install -e .`)"
+        ) from exc
+    return CompiledPlantKernel(kernel, GRAVITY_MPS2, SLIP_SPEED_FLOOR_MPS, SLIP_DIFFERENCE_STEP)
