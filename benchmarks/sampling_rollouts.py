@@ -1,10 +1,13 @@
-"""Sampling roll-outs: CPU time per call of ``candidate_rollouts`` on the calls of a closed loop.
+"""Sampling roll-outs: CPU time per call of ``candidate_rollouts`` on the calls of a closed loop,
+the compiled loop against the numpy one.
 
 Run: ``python benchmarks/sampling_rollouts.py [--scenario popup] [--configuration F] [--rounds R]
 [--calls N]``. One closed-loop run records every call the planner makes to ``candidate_rollouts``
-(arguments and results). The recorded calls are then replayed: every result must come out bit for
-bit as in the run (the script exits with an error otherwise), and the best of ``R`` rounds over
-all calls gives the CPU time per call (``time.process_time``).
+(arguments and results, computed with numpy). The recorded calls are then replayed with each
+kind: every result must come out as in the run (numpy: bit for bit; compiled: bit for bit except
+a NaN's sign and payload, in the candidates that diverged; the script exits with an error
+otherwise), and the best of ``R`` rounds over all calls gives each kind's CPU time per call
+(``time.process_time``) and their ratio.
 
 ``--calls N`` replays ``N`` calls instead (cycling through the recorded ones), once and untimed,
 for an instruction count that the load of a shared machine does not move: run the script under
@@ -24,7 +27,7 @@ from typing import Any
 import numpy as np
 
 import mufusion.planner.planner as planner_module
-from mufusion.planner.sampling import candidate_rollouts
+from mufusion.planner.sampling import candidate_rollouts, compiled_rollouts_available
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
 
@@ -37,7 +40,7 @@ def record_calls(scenario: str, configuration: str) -> list[Call]:
     original = planner_module.candidate_rollouts
 
     def recording(*args: Any, **kwargs: Any) -> tuple[np.ndarray, np.ndarray]:
-        xs, us = original(*args, **kwargs)
+        xs, us = original(*args, **{**kwargs, "kind": "numpy"})
         # The loop may reuse its arrays, and the planner keeps a slice of the result.
         frozen = tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args)
         calls.append((frozen, dict(kwargs), (xs.copy(), us.copy())))
@@ -51,24 +54,30 @@ def record_calls(scenario: str, configuration: str) -> list[Call]:
     return calls
 
 
-def replay(calls: list[Call]) -> int:
-    """Replay the calls; returns how many results differ bit for bit from the recorded ones."""
+def _bytes(a: np.ndarray, canonical_nan: bool) -> bytes:
+    return (np.where(np.isnan(a), np.nan, a) if canonical_nan else a).tobytes()
+
+
+def replay(calls: list[Call], kind: str = "numpy") -> int:
+    """Replay the calls with ``kind``; returns how many results differ from the recorded ones."""
     differ = 0
+    nan = kind != "numpy"
     with np.errstate(all="ignore"):  # as the planner calls it: diverging candidates are kept
         for args, kwargs, (xs_run, us_run) in calls:
-            xs, us = candidate_rollouts(*args, **kwargs)
-            differ += xs.tobytes() != xs_run.tobytes() or us.tobytes() != us_run.tobytes()
+            xs, us = candidate_rollouts(*args, **{**kwargs, "kind": kind})
+            differ += (_bytes(xs, nan) != _bytes(xs_run, nan)
+                       or _bytes(us, nan) != _bytes(us_run, nan))
     return differ
 
 
-def best_cpu_s(calls: list[Call], rounds: int) -> float:
-    """Best of ``rounds`` CPU times [s] for replaying all ``calls`` once."""
+def best_cpu_s(calls: list[Call], rounds: int, kind: str) -> float:
+    """Best of ``rounds`` CPU times [s] for replaying all ``calls`` once with ``kind``."""
     best = float("inf")
     with np.errstate(all="ignore"):
         for _ in range(rounds):
             start = time.process_time()
             for args, kwargs, _ in calls:
-                candidate_rollouts(*args, **kwargs)
+                candidate_rollouts(*args, **{**kwargs, "kind": kind})
             best = min(best, time.process_time() - start)
     return best
 
@@ -91,18 +100,23 @@ def main() -> None:
     if args.calls is not None:
         replay([calls[i % len(calls)] for i in range(args.calls)])
         return
-    differ = replay(calls)
-    if differ:
-        sys.exit(f"{differ} of {len(calls)} replayed calls differ from the run")
-    cpu_s = best_cpu_s(calls, args.rounds)
-    print(json.dumps({
+    kinds = ("numpy", "compiled") if compiled_rollouts_available() else ("numpy",)
+    result: dict[str, Any] = {
         "scenario": args.scenario,
         "configuration": args.configuration,
         "calls": len(calls),
         "rounds": args.rounds,
-        "best_cpu_ms_all_calls": round(1e3 * cpu_s, 2),
-        "cpu_ms_per_call": round(1e3 * cpu_s / len(calls), 3),
-    }))
+    }
+    for kind in kinds:
+        differ = replay(calls, kind)
+        if differ:
+            sys.exit(f"{differ} of {len(calls)} calls replayed with {kind} differ from the run")
+        cpu_s = best_cpu_s(calls, args.rounds, kind)
+        result[f"{kind}_cpu_ms_per_call"] = round(1e3 * cpu_s / len(calls), 3)
+    if len(kinds) == 2:
+        result["ratio_compiled_to_numpy"] = round(
+            result["compiled_cpu_ms_per_call"] / result["numpy_cpu_ms_per_call"], 3)
+    print(json.dumps(result))
 
 
 if __name__ == "__main__":

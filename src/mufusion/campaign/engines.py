@@ -260,8 +260,16 @@ def _dispatch_ray(
                     payload = RunPayload(spec, None, {}, f"{type(exc).__name__}: {exc}")
                 handle(payload)
     except BaseException:
-        for ref in pending:
-            ray.cancel(ref, force=True)
+        # A local instance we started goes down with ray.shutdown() below, workers and all.
+        # Force-cancelling its tasks first raced with tasks finishing at that moment: Ray's core
+        # worker then failed an internal check ("Tried to complete task that was not pending")
+        # and took this process down with exit code 1 (seen once in CI on Ctrl-C). A cluster we
+        # joined outlives us, so there the runs still queued or running are cancelled; those
+        # already finished are left alone (the race remains only for one finishing meanwhile).
+        if not started and pending:
+            ready, _ = ray.wait(list(pending), num_returns=len(pending), timeout=0)
+            for ref in set(pending) - set(ready):
+                ray.cancel(ref, force=True)
         raise
     finally:
         if started:
