@@ -9,6 +9,7 @@ obstacle corridor's side is chosen by the guess, this is what lets the planner s
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -185,6 +186,7 @@ def _per_candidate(value: np.ndarray | float, m_count: int) -> np.ndarray:
     return array if array.shape == (m_count,) else array * np.ones(m_count)
 
 
+@functools.lru_cache(maxsize=1)
 def compiled_rollouts_available() -> bool:
     """Whether the install built the compiled roll-out loop (``_rollouts_c``)."""
     try:

@@ -37,7 +37,7 @@ from mufusion.vehicle.axles import (
     check_mu,
 )
 from mufusion.vehicle.params import TireParams, VehicleParams
-from mufusion.vehicle.plant_kernel import KERNEL_KINDS, AxleFloats, make_kernel
+from mufusion.vehicle.plant_kernel import AxleFloats, make_kernel
 from mufusion.vehicle.plant_state import (
     N_PLANT_STATES,
     PlantState,
@@ -281,8 +281,6 @@ class Plant:
         surface_tires: SurfaceTireTable | None = None,
         kernel: str = "auto",
     ) -> None:
-        if kernel not in KERNEL_KINDS:
-            raise ValueError(f"kernel must be one of {', '.join(KERNEL_KINDS)}; got {kernel!r}")
         if not (0.0 < dt_s <= DEFAULT_DT_S + 1e-12):
             raise ValueError(f"dt_s must be in (0, {DEFAULT_DT_S}] s, got {dt_s!r}")
         if surface_tires is not None and not isinstance(surface_tires, SurfaceTireTable):

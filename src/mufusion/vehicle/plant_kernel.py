@@ -13,6 +13,7 @@ signed zeros included, without a built-in call).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Literal, Protocol, get_args
 
@@ -355,6 +356,7 @@ class PlantKernel:
         return (*chassis[:6], omega_f, omega_r, *chassis[6:]), axles, speeds[4], speeds[5]
 
 
+@functools.lru_cache(maxsize=1)
 def compiled_kernel_available() -> bool:
     """Whether the compiled kernel was built (``pip install`` compiles it; a bare source tree
     has only this module)."""
