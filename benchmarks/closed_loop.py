@@ -93,10 +93,11 @@ class _TimedSolver:
     """The generated acados solver with its ``solve`` timed (the other calls pass through)."""
 
     def __init__(self, solver: Any, clock: StageClock) -> None:
+        self._solver = solver
         self.solve = clock.wrap("acados solve (C)", solver.solve)
-        self.set, self.cost_set = solver.set, solver.cost_set
-        self.constraints_set, self.get, self.reset = (
-            solver.constraints_set, solver.get, solver.reset)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._solver, name)
 
 
 @contextmanager

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from mufusion.planner.ocp import PlannerConfig, PlannerObstacle
 from mufusion.planner.planner import TractionAdaptivePlanner
@@ -68,3 +69,15 @@ def test_writing_only_changed_stages_gives_the_same_plans_as_writing_all() -> No
     for a, b in zip(want, got, strict=True):
         assert a.status == b.status and a.fallback_reason == b.fallback_reason
         assert np.array_equal(a.states, b.states) and np.array_equal(a.inputs, b.inputs)
+
+
+def test_an_iterate_of_another_layout_is_refused_not_read_past() -> None:
+    # The guess and the plan cross in one call into the solver's own C; a buffer of the wrong
+    # size must neither be written past nor pass for a plan.
+    solver = TractionAdaptivePlanner(TRUCK, CONFIG).backend.solvers()[0]
+    for mode in (1.0, 2.0):
+        data = np.zeros(6)
+        data[0] = mode
+        with pytest.raises(RuntimeError, match="another layout"):
+            solver._iterate(data)
+        assert data[0] == mode and not data[1:].any()

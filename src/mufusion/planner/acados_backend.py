@@ -42,7 +42,58 @@ from mufusion.vehicle.planner_model import (
 )
 
 _log = logging.getLogger(__name__)
-_FORMAT_VERSION = "3"
+_FORMAT_VERSION = "5"
+
+# The iterate's batch access compiled into the solver (acados' custom-update hook): one call
+# writes the whole initial guess or reads the whole solution, where the Cython wrapper's
+# set/get take one call per stage and field (≈ 160 per solve). ``data`` is
+# ``[mode, x_0 … x_N, u_0 … u_{N-1}]``; mode 1 writes the guess from it, mode 2 reads the
+# solution into it (the wrapper hands over the caller's contiguous array itself).
+_ITERATE_C = "mufusion_iterate.c"
+_ITERATE_H = "mufusion_iterate.h"
+_ITERATE_HEADER = """#ifndef MUFUSION_ITERATE_H_
+#define MUFUSION_ITERATE_H_
+#include "acados_solver_{name}.h"
+int custom_update_init_function({name}_solver_capsule* capsule);
+int custom_update_function({name}_solver_capsule* capsule, double* data, int data_len);
+int custom_update_terminate_function({name}_solver_capsule* capsule);
+#endif
+"""
+_ITERATE_SOURCE = """#include "acados_c/ocp_nlp_interface.h"
+#include "mufusion_iterate.h"
+
+int custom_update_init_function({name}_solver_capsule* capsule) {{ (void)capsule; return 0; }}
+
+int custom_update_terminate_function({name}_solver_capsule* capsule)
+{{
+    (void)capsule;
+    return 0;
+}}
+
+int custom_update_function({name}_solver_capsule* capsule, double* data, int data_len)
+{{
+    ocp_nlp_config* config = capsule->nlp_config;
+    ocp_nlp_dims* dims = capsule->nlp_dims;
+    ocp_nlp_out* out = capsule->nlp_out;
+    int n = dims->N, write = data[0] == 1.0, used = 1;
+    double* p = data + 1;
+    for (int pass = 0; pass < 2; pass++)
+    {{
+        const char* field = pass == 0 ? "x" : "u";
+        for (int k = 0; k < (pass == 0 ? n + 1 : n); k++)
+        {{
+            int size = ocp_nlp_dims_get_from_attr(config, dims, out, k, field);
+            used += size;
+            if (used > data_len) return 1;
+            if (write) ocp_nlp_out_set(config, dims, out, k, field, p);
+            else ocp_nlp_out_get(config, dims, out, k, field, p);
+            p += size;
+        }}
+    }}
+    data[0] = (double)used; /* the caller checks that the layout matched */
+    return 0;
+}}
+"""
 
 
 FAST_HPIPM_MODE = "SPEED"
@@ -69,6 +120,7 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "steering_rate_limit": config.steering_rate_limit,
             "load_transfer": config.load_transfer,
             "utilization": config.utilization_factor,
+            "iterate": _ITERATE_HEADER + _ITERATE_SOURCE,
         },
         sort_keys=True,
     )
@@ -92,6 +144,8 @@ class _GeneratedSolver:
             _log.info("generating and compiling the acados solver in %s", export)
             ocp = _describe(at, params, config, name, export, hpipm_mode)
             at.AcadosOcpSolver.generate(ocp, json_file=str(export / "ocp.json"))
+            (export / _ITERATE_H).write_text(_ITERATE_HEADER.format(name=name))
+            (export / _ITERATE_C).write_text(_ITERATE_SOURCE.format(name=name))
             at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
         # The template imports the wrapper by a cwd-relative module path; load it by file instead.
         spec = importlib.util.spec_from_file_location("acados_ocp_solver_pyx", lib)
@@ -128,10 +182,12 @@ class _GeneratedSolver:
                 x0, guess_x, guess_u, p, self.polygon_sides, self.dt_s)
         s.set(0, "lbx", x0)
         s.set(0, "ubx", x0)
-        for k in range(n):
-            s.set(k, "x", guess_x[k])
-            s.set(k, "u", guess_u[k])
-        s.set(n, "x", guess_x[n])
+        iterate = np.empty(1 + guess_x.size + guess_u.size)
+        split = 1 + guess_x.size
+        iterate[0] = 1.0  # write
+        iterate[1:split] = guess_x.ravel()
+        iterate[split:] = guess_u.ravel()
+        self._iterate(iterate)
         # The problem data below often repeat from one step to the next (weights and drive
         # bound per mode, references on a straight, parameters of a uniform road): only the
         # stages whose values changed are written.
@@ -148,11 +204,23 @@ class _GeneratedSolver:
         self._update("lbx_terminal", s.constraints_set, lbx[-1:, :1], (n,))
         self._update("ubx_terminal", s.constraints_set, ubx[-1:, :1], (n,))
         status = s.solve()
-        xs = np.array([s.get(k, "x") for k in range(n + 1)])
-        us = np.array([s.get(k, "u") for k in range(n)])
+        iterate[0] = 2.0  # read
+        self._iterate(iterate)
+        xs = iterate[1:split].reshape(guess_x.shape)
+        us = iterate[split:].reshape(guess_u.shape)
         if self.augmented:
             xs, us = plan_from_augmented(xs, us)
         return int(status), xs, us
+
+    def _iterate(self, data: np.ndarray) -> None:
+        """Write (``data[0] = 1``) or read (``2``) the whole iterate in one call (see
+        ``_ITERATE_SOURCE``)."""
+        size = data.size
+        self.solver.custom_update(data)
+        if data[0] != size:
+            raise RuntimeError(
+                f"the solver's iterate has another layout than the planner's ({size} values)"
+            )
 
     def _update(self, key: str, setter, values: np.ndarray, stages: Sequence[int]) -> None:
         """Write ``values[i]`` to ``stages[i]`` where it differs from what was written last.
@@ -357,5 +425,9 @@ def _describe(
     so.sim_method_num_stages = 4
     so.sim_method_num_steps = 1
     so.qp_solver_iter_max = 50
+    # Written into the export directory by the caller, compiled there (no copy from the cwd).
+    so.custom_update_filename = _ITERATE_C
+    so.custom_update_header_filename = _ITERATE_H
+    so.custom_update_copy = False
     ocp.code_export_directory = str(export)
     return ocp
