@@ -1,23 +1,63 @@
-"""The acados backend writes only the problem data that changed; the plans stay bit for bit."""
+"""The acados backend writes the problem and the guess, and reads the plan, in one call each
+through C compiled into the solver; the plans are bit for bit those of acados' own per-stage
+setters and getters."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pytest
 
+from mufusion.planner import acados_backend
+from mufusion.planner.front_force import augmented_problem, plan_from_augmented
 from mufusion.planner.ocp import PlannerConfig, PlannerObstacle
 from mufusion.planner.planner import TractionAdaptivePlanner
 from mufusion.vehicle.params import TRUCK
+from mufusion.vehicle.planner_model import N_INPUTS, N_STATES
 
 CONFIG = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=3.95)
 
 
-class Probe:
-    """Wraps an acados backend: optionally forgets what it wrote (so it writes everything),
-    and poisons the parameters of chosen solves (a NaN solve makes the planner reset it)."""
+def _solve_through_the_wrapper(self, x0, guess_x, guess_u, p, yref, weights, lbx, ubx, ubu):
+    """The reference: every stage and field through the Cython wrapper's public set calls."""
+    s, n = self.solver, self.n
+    if self.augmented:
+        x0, guess_x, guess_u = augmented_problem(
+            x0, guess_x, guess_u, p, self.polygon_sides, self.dt_s)
+    s.set(0, "lbx", x0)
+    s.set(0, "ubx", x0)
+    w_stage = np.diag(weights[: N_STATES + N_INPUTS])
+    for k in range(n):
+        s.set(k, "x", guess_x[k])
+        s.set(k, "u", guess_u[k])
+        s.set(k, "p", p[k])
+        s.cost_set(k, "yref", yref[k])
+        s.cost_set(k, "W", w_stage)
+        s.constraints_set(k, "ubu", ubu)
+        if k > 0:
+            s.constraints_set(k, "lbx", lbx[k - 1])
+            s.constraints_set(k, "ubx", ubx[k - 1])
+    s.set(n, "x", guess_x[n])
+    s.set(n, "p", p[n - 1])
+    s.cost_set(n, "yref", yref[n, :N_STATES])
+    s.cost_set(n, "W", w_stage[:N_STATES, :N_STATES])
+    s.constraints_set(n, "lbx", lbx[-1, :1])
+    s.constraints_set(n, "ubx", ubx[-1, :1])
+    status = s.solve()
+    xs = np.array([s.get(k, "x") for k in range(n + 1)])
+    us = np.array([s.get(k, "u") for k in range(n)])
+    if self.augmented:
+        xs, us = plan_from_augmented(xs, us)
+    return int(status), xs, us
 
-    def __init__(self, inner, write_all: bool) -> None:
-        self.inner, self.write_all = inner, write_all
+
+class Probe:
+    """Wraps an acados backend and poisons the parameters of chosen solves (a NaN solve makes
+    the planner reset it)."""
+
+    def __init__(self, inner) -> None:
+        self.inner = inner
         self.poison = False
 
     @property
@@ -25,9 +65,6 @@ class Probe:
         return self.inner.last_solve_retried
 
     def solve(self, x0, guess_x, guess_u, p, *args):
-        if self.write_all:
-            for generated in self.inner.solvers():
-                generated._written.clear()
         if self.poison:
             p = np.full_like(p, np.nan)
         return self.inner.solve(x0, guess_x, guess_u, p, *args)
@@ -59,11 +96,14 @@ def _drive(probe: Probe) -> list:
     return plans
 
 
-def test_writing_only_changed_stages_gives_the_same_plans_as_writing_all() -> None:
-    reference = TractionAdaptivePlanner(TRUCK, CONFIG).backend
-    cached = TractionAdaptivePlanner(TRUCK, CONFIG).backend
-    want = _drive(Probe(reference, write_all=True))
-    got = _drive(Probe(cached, write_all=False))
+@pytest.mark.parametrize("steering_rate_limit", [False, True])
+def test_one_call_writes_and_reads_give_the_plans_of_the_per_stage_setters(
+    steering_rate_limit: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    config = dataclasses.replace(CONFIG, steering_rate_limit=steering_rate_limit)
+    got = _drive(Probe(TractionAdaptivePlanner(TRUCK, config).backend))
+    monkeypatch.setattr(acados_backend._GeneratedSolver, "solve", _solve_through_the_wrapper)
+    want = _drive(Probe(TractionAdaptivePlanner(TRUCK, config).backend))
     assert not want[17].ok and want[18].ok  # the poisoned solve, then a reset solver
     assert [p.mode for p in want] == [p.mode for p in got]
     for a, b in zip(want, got, strict=True):
@@ -71,13 +111,13 @@ def test_writing_only_changed_stages_gives_the_same_plans_as_writing_all() -> No
         assert np.array_equal(a.states, b.states) and np.array_equal(a.inputs, b.inputs)
 
 
-def test_an_iterate_of_another_layout_is_refused_not_read_past() -> None:
-    # The guess and the plan cross in one call into the solver's own C; a buffer of the wrong
-    # size must neither be written past nor pass for a plan.
+@pytest.mark.parametrize("mode", [1.0, 2.0, 3.0])  # write, read, no such mode
+def test_a_buffer_of_another_layout_is_refused_untouched(mode: float) -> None:
+    # The problem, the guess and the plan cross in one call into the solver's own C; a buffer of
+    # the wrong size must neither be written past, nor half written, nor pass for a plan.
     solver = TractionAdaptivePlanner(TRUCK, CONFIG).backend.solvers()[0]
-    for mode in (1.0, 2.0):
-        data = np.zeros(6)
-        data[0] = mode
-        with pytest.raises(RuntimeError, match="another layout"):
-            solver._iterate(data)
-        assert data[0] == mode and not data[1:].any()
+    data = np.zeros(6)
+    data[0] = mode
+    with pytest.raises(RuntimeError, match="another layout"):
+        solver._exchange(data)
+    assert not data[1:].any()

@@ -9,6 +9,7 @@ including beyond the path's ends and from bad warm starts.
 from __future__ import annotations
 
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -26,6 +27,7 @@ from mufusion.road import (
     signed_clearance_points,
     turn_road,
 )
+from mufusion.road.path import compiled_frames_available
 
 TOL = 1e-9
 # Both turn directions, with clothoids (linear curvature: quadrature) and without.
@@ -124,3 +126,38 @@ def test_plain_float_rectangles_equal_the_array_versions(x, y, heading, length, 
     got = signed_clearance_points(points, [tuple(p) for p in other.tolist()])
     assert got == pytest.approx(expected, abs=1e-12)
     assert math.isfinite(got)
+
+
+def test_the_install_built_the_compiled_frames() -> None:
+    # `pip install -e .` compiles them; without them every run silently takes the slower path.
+    assert compiled_frames_available()
+    assert PATHS[0]._newton_scalar != PATHS[0]._newton_python
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_compiled_frame_and_newton_equal_the_python_bitwise(path: ReferencePath) -> None:
+    # Progress beyond both ends, at segment starts, NaN; points on both sides, far off the
+    # path (the slope floor), warm starts good and bad, and iteration limits 1 to 30.
+    rng = np.random.default_rng(5)
+    starts = np.cumsum([0.0] + [seg.length_m for seg in path.segments]).tolist()
+    s_values = [*rng.uniform(-20.0, path.length_m + 20.0, 600).tolist(), *starts,
+                -0.0, math.nan, math.inf, -math.inf]
+    for s in s_values:
+        # repr: exact digits and the sign of zero, not just ==
+        assert repr(path._frame_scalar(s)) == repr(path._frame_python(s)), s
+    s_true = rng.uniform(-10.0, path.length_m + 10.0, 600)
+    x, y, _ = path.to_cartesian(s_true, rng.uniform(-40.0, 40.0, 600))
+    guesses = s_true + rng.normal(0.0, 8.0, 600)
+    iterations = rng.integers(1, 31, 600)
+    for px, py, guess, k in zip(x.tolist(), y.tolist(), guesses.tolist(), iterations.tolist(),
+                                strict=True):
+        want = path._newton_python(px, py, guess, k)
+        assert repr(path._newton_scalar(px, py, guess, k)) == repr(want)
+
+
+def test_a_pickled_path_projects_as_the_original() -> None:
+    # Campaign workers receive roads pickled; the compiled frames travel with them.
+    path = PATHS[2]
+    copy = pickle.loads(pickle.dumps(path))
+    assert copy.to_frenet_point(12.0, 3.0, 0.2, 11.0) == path.to_frenet_point(12.0, 3.0, 0.2, 11.0)
+    assert copy._frame_scalar(31.5) == path._frame_scalar(31.5)

@@ -6,7 +6,6 @@ import hashlib
 import importlib.util
 import json
 import logging
-from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -42,13 +41,18 @@ from mufusion.vehicle.planner_model import (
 )
 
 _log = logging.getLogger(__name__)
-_FORMAT_VERSION = "5"
+_FORMAT_VERSION = "6"
 
-# The iterate's batch access compiled into the solver (acados' custom-update hook): one call
-# writes the whole initial guess or reads the whole solution, where the Cython wrapper's
-# set/get take one call per stage and field (≈ 160 per solve). ``data`` is
-# ``[mode, x_0 … x_N, u_0 … u_{N-1}]``; mode 1 writes the guess from it, mode 2 reads the
-# solution into it (the wrapper hands over the caller's contiguous array itself).
+# The problem's and the iterate's batch access compiled into the solver (acados' custom-update
+# hook). One call writes the whole problem and initial guess, one reads the whole solution,
+# where the Cython wrapper's set/get take one call per stage and field (≈ 300 per solve).
+# ``data[0]`` is the mode:
+#   1  write ``[1, x_0 (stage 0's bounds), p_0 … p_N, yref_0 … yref_N, W_0 … W_N (column-major),
+#      ubu_0 … ubu_{N-1}, lbx_1 … lbx_N, ubx_1 … ubx_N, x_0 … x_N, u_0 … u_{N-1}]``;
+#   2  read ``[2, x_0 … x_N, u_0 … u_{N-1}]`` (the solution, into the caller's array).
+# Each stage's sizes come from the solver's own dimensions. If the buffer's length differs from
+# the layout's, nothing is written or read; either way ``data[0]`` returns the layout's length,
+# which the caller checks. The setters are those the wrapper's set/cost_set/constraints_set call.
 _ITERATE_C = "mufusion_iterate.c"
 _ITERATE_H = "mufusion_iterate.h"
 _ITERATE_HEADER = """#ifndef MUFUSION_ITERATE_H_
@@ -70,31 +74,85 @@ int custom_update_terminate_function({name}_solver_capsule* capsule)
     return 0;
 }}
 
-int custom_update_function({name}_solver_capsule* capsule, double* data, int data_len)
+/* Walks the layout (returns its length); with act == 0 only counts. */
+static int walk({name}_solver_capsule* capsule, double* data, int write, int act)
 {{
     ocp_nlp_config* config = capsule->nlp_config;
     ocp_nlp_dims* dims = capsule->nlp_dims;
+    ocp_nlp_in* in = capsule->nlp_in;
     ocp_nlp_out* out = capsule->nlp_out;
-    int n = dims->N, write = data[0] == 1.0, used = 1;
-    double* p = data + 1;
+    int n = dims->N, size, w[2], used = 1;
+    if (write)
+    {{
+        size = ocp_nlp_dims_get_from_attr(config, dims, out, 0, "lbx");
+        if (act)
+        {{
+            ocp_nlp_constraints_model_set(config, dims, in, 0, "lbx", data + used);
+            ocp_nlp_constraints_model_set(config, dims, in, 0, "ubx", data + used);
+        }}
+        used += size;
+        for (int k = 0; k <= n; k++)
+        {{
+            if (act) {name}_acados_update_params(capsule, k, data + used, {upper}_NP);
+            used += {upper}_NP;
+        }}
+        for (int k = 0; k <= n; k++)
+        {{
+            size = ocp_nlp_dims_get_from_attr(config, dims, out, k, "yref");
+            if (act) ocp_nlp_cost_model_set(config, dims, in, k, "yref", data + used);
+            used += size;
+        }}
+        for (int k = 0; k <= n; k++)
+        {{
+            ocp_nlp_cost_dims_get_from_attr(config, dims, out, k, "W", w);
+            if (act) ocp_nlp_cost_model_set(config, dims, in, k, "W", data + used);
+            used += w[0] * w[1];
+        }}
+        for (int k = 0; k < n; k++)
+        {{
+            size = ocp_nlp_dims_get_from_attr(config, dims, out, k, "ubu");
+            if (act) ocp_nlp_constraints_model_set(config, dims, in, k, "ubu", data + used);
+            used += size;
+        }}
+        for (int bound = 0; bound < 2; bound++)
+        {{
+            const char* field = bound == 0 ? "lbx" : "ubx";
+            for (int k = 1; k <= n; k++)
+            {{
+                size = ocp_nlp_dims_get_from_attr(config, dims, out, k, field);
+                if (act) ocp_nlp_constraints_model_set(config, dims, in, k, field, data + used);
+                used += size;
+            }}
+        }}
+    }}
     for (int pass = 0; pass < 2; pass++)
     {{
         const char* field = pass == 0 ? "x" : "u";
         for (int k = 0; k < (pass == 0 ? n + 1 : n); k++)
         {{
-            int size = ocp_nlp_dims_get_from_attr(config, dims, out, k, field);
+            size = ocp_nlp_dims_get_from_attr(config, dims, out, k, field);
+            if (act && write) ocp_nlp_out_set(config, dims, out, k, field, data + used);
+            else if (act) ocp_nlp_out_get(config, dims, out, k, field, data + used);
             used += size;
-            if (used > data_len) return 1;
-            if (write) ocp_nlp_out_set(config, dims, out, k, field, p);
-            else ocp_nlp_out_get(config, dims, out, k, field, p);
-            p += size;
         }}
     }}
+    return used;
+}}
+
+int custom_update_function({name}_solver_capsule* capsule, double* data, int data_len)
+{{
+    int write = data[0] == 1.0;
+    if (!write && data[0] != 2.0) return 1;
+    int used = walk(capsule, data, write, 0);
+    if (used == data_len) walk(capsule, data, write, 1);
     data[0] = (double)used; /* the caller checks that the layout matched */
     return 0;
 }}
 """
 
+
+_WRITE, _READ = 1.0, 2.0
+"""Modes of ``_ITERATE_SOURCE``."""
 
 FAST_HPIPM_MODE = "SPEED"
 """HPIPM's mode for every solve: about half the QP time of ``BALANCE`` on this problem."""
@@ -145,7 +203,8 @@ class _GeneratedSolver:
             ocp = _describe(at, params, config, name, export, hpipm_mode)
             at.AcadosOcpSolver.generate(ocp, json_file=str(export / "ocp.json"))
             (export / _ITERATE_H).write_text(_ITERATE_HEADER.format(name=name))
-            (export / _ITERATE_C).write_text(_ITERATE_SOURCE.format(name=name))
+            (export / _ITERATE_C).write_text(
+                _ITERATE_SOURCE.format(name=name, upper=name.upper()))
             at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
         # The template imports the wrapper by a cwd-relative module path; load it by file instead.
         spec = importlib.util.spec_from_file_location("acados_ocp_solver_pyx", lib)
@@ -157,8 +216,6 @@ class _GeneratedSolver:
         self.augmented = config.steering_rate_limit
         self.polygon_sides, self.dt_s = config.polygon_sides, config.dt_s
         self.solver = module.AcadosOcpSolverCython(name, "SQP_RTI", n)
-        # What solve() last wrote per problem field (stage rows), to skip unchanged stages.
-        self._written: dict[str, np.ndarray] = {}
 
     def solve(
         self,
@@ -172,78 +229,47 @@ class _GeneratedSolver:
         ubx: np.ndarray,
         ubu: np.ndarray,
     ) -> tuple[int, np.ndarray, np.ndarray]:
-        """Write the problem (changed stages only), run one RTI step, read the plan.
+        """Write the problem and the guess in one call, run one RTI step, read the plan.
 
         Takes and returns the planner's states ``(N+1, 6)`` and forces ``(N, 3)``; with the
         steering's rate limit the OCP's front-force state is formed and dropped here."""
-        s, n = self.solver, self.n
+        n = self.n
         if self.augmented:
             x0, guess_x, guess_u = augmented_problem(
                 x0, guess_x, guess_u, p, self.polygon_sides, self.dt_s)
-        s.set(0, "lbx", x0)
-        s.set(0, "ubx", x0)
-        iterate = np.empty(1 + guess_x.size + guess_u.size)
-        split = 1 + guess_x.size
-        iterate[0] = 1.0  # write
-        iterate[1:split] = guess_x.ravel()
-        iterate[split:] = guess_u.ravel()
-        self._iterate(iterate)
-        # The problem data below often repeat from one step to the next (weights and drive
-        # bound per mode, references on a straight, parameters of a uniform road): only the
-        # stages whose values changed are written.
-        self._update("p", s.set, p[:n], range(n))
-        self._update("p_terminal", s.set, p[n - 1 : n], (n,))
-        self._update("yref", s.cost_set, yref[:n], range(n))
-        self._update("yref_terminal", s.cost_set, yref[n:, :N_STATES], (n,))
         w_stage = np.diag(weights[: N_STATES + N_INPUTS])
-        self._update("W", s.cost_set, w_stage[None], range(n))
-        self._update("W_terminal", s.cost_set, w_stage[None, :N_STATES, :N_STATES], (n,))
-        self._update("ubu", s.constraints_set, ubu[None], range(n))
-        self._update("lbx", s.constraints_set, lbx[:-1], range(1, n))
-        self._update("ubx", s.constraints_set, ubx[:-1], range(1, n))
-        self._update("lbx_terminal", s.constraints_set, lbx[-1:, :1], (n,))
-        self._update("ubx_terminal", s.constraints_set, ubx[-1:, :1], (n,))
-        status = s.solve()
-        iterate[0] = 2.0  # read
-        self._iterate(iterate)
-        xs = iterate[1:split].reshape(guess_x.shape)
-        us = iterate[split:].reshape(guess_u.shape)
+        # The layout of _ITERATE_SOURCE's mode 1; the terminal stage takes the last stage's
+        # parameters, the reference's and weights' state part and the lateral bound only.
+        problem = (
+            _WRITE, x0, p[:n], p[n - 1], yref[:n], yref[n, :N_STATES],
+            np.broadcast_to(w_stage.ravel(order="F"), (n, w_stage.size)),
+            w_stage[:N_STATES, :N_STATES].ravel(order="F"),
+            np.broadcast_to(ubu, (n, ubu.size)),
+            lbx[:-1], lbx[-1, :1], ubx[:-1], ubx[-1, :1],
+        )
+        data = np.concatenate([np.ravel(part) for part in (*problem, guess_x, guess_u)])
+        self._exchange(data)
+        status = self.solver.solve()
+        plan = np.empty(1 + guess_x.size + guess_u.size)
+        plan[0] = _READ
+        self._exchange(plan)
+        split = 1 + guess_x.size
+        xs = plan[1:split].reshape(guess_x.shape)
+        us = plan[split:].reshape(guess_u.shape)
         if self.augmented:
             xs, us = plan_from_augmented(xs, us)
         return int(status), xs, us
 
-    def _iterate(self, data: np.ndarray) -> None:
-        """Write (``data[0] = 1``) or read (``2``) the whole iterate in one call (see
-        ``_ITERATE_SOURCE``)."""
+    def _exchange(self, data: np.ndarray) -> None:
+        """Write the problem and the guess (``data[0] = 1``) or read the plan (``2``) in one
+        call (see ``_ITERATE_SOURCE``); a buffer of another layout is refused untouched."""
         size = data.size
         self.solver.custom_update(data)
         if data[0] != size:
             raise RuntimeError(
-                f"the solver's iterate has another layout than the planner's ({size} values)"
+                f"the solver's problem and iterate have another layout than the planner's "
+                f"({size} values)"
             )
-
-    def _update(self, key: str, setter, values: np.ndarray, stages: Sequence[int]) -> None:
-        """Write ``values[i]`` to ``stages[i]`` where it differs from what was written last.
-
-        One row of ``values`` for several stages writes it to each of them. The solver keeps
-        problem data until overwritten (``reset`` clears iterates only), so skipping an
-        unchanged stage leaves the solve exactly as if it were written again.
-        """
-        field = key.removesuffix("_terminal")
-        # Forgotten until every write succeeded: after an error, everything is written again.
-        previous = self._written.pop(key, None)
-        rows: Sequence[int]
-        if previous is None or previous.shape != values.shape:
-            rows = range(len(stages))
-        elif len(values) == 1:
-            rows = range(len(stages)) if (values != previous).any() else range(0)
-        else:
-            differs = (values != previous).reshape(len(stages), -1)
-            rows = differs.any(axis=1).nonzero()[0].tolist()
-        uniform = len(values) == 1
-        for i in rows:
-            setter(stages[i], field, values[0 if uniform else i])
-        self._written[key] = values.copy()
 
     def reset(self) -> None:
         """Zero every iterate (primal, dual, slacks) and the QP solver's memory."""

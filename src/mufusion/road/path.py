@@ -12,9 +12,10 @@ that overshoots still has well-defined Frenet coordinates.
 
 from __future__ import annotations
 
+import functools
 import math
 from bisect import bisect_right as _bisect_right
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +28,17 @@ _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(8)
 # over, and the largest accepted distance from the guess [m].
 _WARM_START_ITERATIONS = 8
 _WARM_START_MAX_JUMP_M = 5.0
+
+
+@functools.lru_cache(maxsize=1)
+def compiled_frames_available() -> bool:
+    """Whether the install built the compiled frame and projection (``road/_path_c.pyx``;
+    ``pip install`` compiles it, a bare source tree has only the Python)."""
+    try:
+        from mufusion.road._path_c import CompiledFrames  # noqa: F401
+    except ImportError:
+        return False
+    return True
 
 
 @dataclass(frozen=True)
@@ -156,6 +168,18 @@ class ReferencePath:
                                     strict=True)
         ]
         self._py_gauss = list(zip(_GL_NODES.tolist(), _GL_WEIGHTS.tolist(), strict=True))
+        # The per-step frame and Newton projection: the compiled twin where the install built
+        # it (the same values, bit for bit; see road/_path_c.pyx), else the Python below.
+        self._frame_scalar: Callable[[float], tuple[float, float, float, float]]
+        self._newton_scalar: Callable[[float, float, float, int],
+                                      tuple[float, float, float, bool]]
+        if compiled_frames_available():
+            from mufusion.road._path_c import CompiledFrames
+
+            frames = CompiledFrames(self._py_anchors, self._py_gauss, self.length_m)
+            self._frame_scalar, self._newton_scalar = frames.frame, frames.newton
+        else:
+            self._frame_scalar, self._newton_scalar = self._frame_python, self._newton_python
 
     @property
     def max_abs_curvature_1pm(self) -> float:
@@ -234,7 +258,7 @@ class ReferencePath:
         xy[1] += beyond * np.sin(heading)
         return xy[0], xy[1], heading, kappa
 
-    def _frame_scalar(self, s: float) -> tuple[float, float, float, float]:
+    def _frame_python(self, s: float) -> tuple[float, float, float, float]:
         """Plain-float version of :meth:`_frame` for one point."""
         # min(max(s, 0), length) and min(max(j, 0), last) as comparisons (the same values,
         # NaN and signed zeros included, without the built-in calls).
@@ -269,11 +293,11 @@ class ReferencePath:
         beyond = s - clamped
         return x + beyond * math.cos(heading), y + beyond * math.sin(heading), heading, 0.0
 
-    def _newton_scalar(
+    def _newton_python(
         self, px: float, py: float, s: float, max_iterations: int
     ) -> tuple[float, float, float, bool]:
         """Foot point of ``(px, py)`` by Newton from ``s``: ``(s, d, heading, converged)``."""
-        frame, cos, sin = self._frame_scalar, math.cos, math.sin
+        frame, cos, sin = self._frame_python, math.cos, math.sin
         for _ in range(max_iterations):
             cx, cy, heading, kappa = frame(s)
             tx, ty = cos(heading), sin(heading)
@@ -288,7 +312,7 @@ class ReferencePath:
                 # At the converged foot point, a step this short moves d by O(κ·step²) (below
                 # rounding) and turns the heading by κ·step: no need to evaluate the frame again.
                 return s, d, heading + kappa * step, True
-        cx, cy, heading, _ = self._frame_scalar(s)
+        cx, cy, heading, _ = frame(s)
         return s, -(px - cx) * math.sin(heading) + (py - cy) * math.cos(heading), heading, False
 
     def _to_frenet_scalar(self, px: float, py: float) -> tuple[float, float, float]:
