@@ -30,6 +30,7 @@ from mufusion.planner.ocp import (
     longitudinal_force_bounds_n,
     plan_polygon_radii_n,
     polygon_directions,
+    polygon_rows,
     stage_parameters,
 )
 from mufusion.planner.planner import TractionAdaptivePlanner, rollout
@@ -103,8 +104,9 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
     model.set_rhs("x", x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4))
     h = constraint_expressions(x, u, p, TRUCK, config.polygon_sides,
                                load_transfer=config.load_transfer)
-    model.set_expression("h_front", h[: config.polygon_sides])
-    model.set_expression("h_rear", h[config.polygon_sides:])
+    rows = polygon_rows(config.polygon_sides, load_transfer=config.load_transfer)
+    model.set_expression("h_front", h[: rows.per_axle])
+    model.set_expression("h_rear", h[rows.per_axle:])
     model.setup()
 
     mpc = do_mpc.controller.MPC(model)
@@ -122,10 +124,14 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
     lower, upper = longitudinal_force_bounds_n(TRUCK)
     mpc.bounds["lower", "_u", "u"] = np.array([-1e6, lower[0], lower[1]])
     mpc.bounds["upper", "_u", "u"] = np.array([1e6, upper[0], upper[1]])
-    for j in range(config.polygon_sides):
-        mpc.set_nl_cons(f"front{j}", model.aux["h_front"][j], ub=0.0)
-        mpc.set_nl_cons(f"rear{j}", model.aux["h_rear"][j], ub=0.0, soft_constraint=True,
-                        penalty_term_cons=w.slack_l2)
+    # A two-sided row is a pair of opposite faces, |row| <= upper: one constraint per face.
+    sides = (("a", 1.0), ("b", -1.0)) if rows.two_sided else (("", 1.0),)
+    for j in range(rows.per_axle):
+        for side, sign in sides:
+            mpc.set_nl_cons(f"front{j}{side}", sign * model.aux["h_front"][j] - rows.upper,
+                            ub=0.0)
+            mpc.set_nl_cons(f"rear{j}{side}", sign * model.aux["h_rear"][j] - rows.upper,
+                            ub=0.0, soft_constraint=True, penalty_term_cons=w.slack_l2)
     mpc.set_nl_cons("d_hi", x[State.d] - tvp["d_hi"], ub=0.0, soft_constraint=True,
                     penalty_term_cons=w.slack_l2)
     mpc.set_nl_cons("d_lo", tvp["d_lo"] - x[State.d], ub=0.0, soft_constraint=True,

@@ -12,10 +12,12 @@ from mufusion.planner.ocp import (
     constraint_expressions,
     plan_polygon_radii_n,
     polygon_directions,
+    polygon_rows,
     stage_parameters,
 )
 from mufusion.planner.plan import FallbackReason
 from mufusion.planner.safeguards import check_solution
+from mufusion.reproduction.graded import SATURATION
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
 from mufusion.vehicle.params import GRAVITY_MPS2, TRUCK
@@ -83,10 +85,17 @@ def test_rows_bind_at_the_radius_of_the_stages_own_loads() -> None:
     limit = k * (fzf0 - fxr * h / wheelbase) / (1.0 - k * h / wheelbase)
     assert _rows(-limit, fxr, 0.0, True)[6] == pytest.approx(0.0, abs=1e-12)
     assert _rows(-1.01 * limit, fxr, 0.0, True)[6] > 0.0
-    # At the guess's loads (no transfer) the same braking is beyond the front polygon.
-    assert _rows(-limit, fxr, 0.0, False)[6] > 0.05
-    # With zero longitudinal force the two formulations agree.
-    assert np.allclose(_rows(0.0, 0.0, 20e3, True), _rows(0.0, 0.0, 20e3, False), atol=1e-12)
+    # At the guess's loads (no transfer) the same braking is beyond the front polygon: the
+    # slab along F_x (row 0, faces θ = 0 and π) below its lower bound.
+    slabs = polygon_rows(12, load_transfer=False)
+    assert slabs.lower - _rows(-limit, fxr, 0.0, False)[0] > 0.05
+    # With zero longitudinal force the two formulations agree: each face's excess over its
+    # bound (the slab's two sides are faces j and j + n/2).
+    slab = _rows(0.0, 0.0, 20e3, False)
+    front, rear = slab[: slabs.per_axle], slab[slabs.per_axle:]
+    excess = np.concatenate([front - slabs.upper, -front - slabs.upper,
+                             rear - slabs.upper, -rear - slabs.upper])
+    assert np.allclose(_rows(0.0, 0.0, 20e3, True), excess, atol=1e-12)
 
 
 def test_the_solution_check_measures_a_plan_against_its_own_polygons() -> None:
@@ -102,23 +111,28 @@ def test_the_solution_check_measures_a_plan_against_its_own_polygons() -> None:
     assert check_solution(*args, load_transfer=False) is FallbackReason.IMPLAUSIBLE
 
 
-def test_the_truck_leaves_the_arc_in_its_lane_when_the_plans_count_their_load_transfer() -> None:
+def test_the_rear_tires_keep_their_reserve_when_the_plans_count_their_load_transfer() -> None:
     # 18 m/s, μ 0.9, curve 40 m ahead, right, no clothoid (feasible). At the arc's end the
     # corridor narrows (the corners' swing at the guess's heading) and the least-violating plan
     # brakes at once, −59 kN; at the guess's loads its rear polygon is 26.5 kN, at the loads of
-    # that braking 9.7 kN: the rear tires saturate and the body swings 9 cm over the lane edge.
-    # Measured on the speed reference this was found on (braking as late as the polygon allows,
-    # regaining speed at once): the default reference keeps this run in lane with either loads.
+    # that braking 9.7 kN: planned at the guess's loads, the rear tires saturate and the body
+    # swings towards the lane edge. Whether a corner then crosses it is decided by centimetres
+    # (9 cm over with the polygon's faces as one-sided QP rows, 6.5 cm inside with the same
+    # polygon as two-sided slabs), so the test measures the mechanism: saturation, body slip and
+    # the room left. Measured on the speed reference this was found on (braking as late as the
+    # polygon allows, regaining speed at once).
     overrides = ["initial_speed_mps=18", "friction.mu_turn=0.9", "turn.start_ahead_m=40",
                  "turn.direction=right", "turn.clothoid_m=0", "vehicle=truck",
                  "planner.reference_braking_fraction=1", "planner.reference_regain_limit=false"]
-    m = compute_metrics(run_scenario(load_scenario("turn", overrides), "GT"))
+    own = run_scenario(load_scenario("turn", overrides), "GT")
+    m = compute_metrics(own)
     assert m.feasibility == "feasible"
     assert m.max_lane_excursion_m == 0.0
-    guess_loads = compute_metrics(run_scenario(
-        load_scenario("turn", [*overrides, "planner.load_transfer=false"]), "GT"))
-    assert guess_loads.max_lane_excursion_m > 0.05
-    assert guess_loads.max_body_slip_rad > m.max_body_slip_rad
+    guess = run_scenario(load_scenario("turn", [*overrides, "planner.load_transfer=false"]), "GT")
+    guess_loads = compute_metrics(guess)
+    assert guess.timeseries["util_rear"].max() >= SATURATION > own.timeseries["util_rear"].max()
+    assert guess_loads.max_body_slip_rad > 1.2 * m.max_body_slip_rad
+    assert guess_loads.min_lane_margin_m < m.min_lane_margin_m - 0.05
 
 
 def test_a_braking_plan_logs_the_loads_and_limits_of_its_own_braking() -> None:
@@ -141,3 +155,43 @@ def test_a_braking_plan_logs_the_loads_and_limits_of_its_own_braking() -> None:
     assert plan.normal_load_rear_n[0] == pytest.approx(fzr)
     assert plan.force_limit_front_n[0] == pytest.approx(LAMBDA * MU * fzf)
     assert plan.force_limit_rear_n[0] == pytest.approx(LAMBDA * MU * fzr)
+
+
+@pytest.mark.parametrize("n_sides", [12, 16, 24])
+@pytest.mark.parametrize("load_transfer", [False, True])
+def test_the_rows_admit_what_the_polygons_faces_admit(n_sides: int, load_transfer: bool) -> None:
+    # Without load transfer the rows are slabs (opposite faces in pairs, two-sided), with it one
+    # row per face: either way lower <= h <= upper exactly where every face n_j . f <= R cos(π/n)
+    # holds, for the front (inputs) and the rear polygon (F_yr from the state's slip).
+    import casadi as ca
+
+    x, u, p = ca.SX.sym("x", N_STATES), ca.SX.sym("u", N_INPUTS), ca.SX.sym("p", len(Param))
+    h = ca.Function("h", [x, u, p], [constraint_expressions(x, u, p, TRUCK, n_sides,
+                                                                load_transfer=load_transfer)])
+    rows = polygon_rows(n_sides, load_transfer=load_transfer)
+    normals, ratio = polygon_directions(n_sides)
+    params = _stage()["p"][0].copy()
+    rng = np.random.default_rng(n_sides)
+    inside_count = 0
+    for _ in range(400):
+        f = rng.uniform(-1.1, 1.1, 2) * params[Param.radius_front]
+        forces = np.zeros(N_INPUTS)
+        forces[Input.fyf], forces[Input.fxf] = f[1], f[0]
+        values = np.asarray(h(np.zeros(N_STATES), forces, params)).ravel()
+        assert values.size == rows.count
+        front = values[: rows.per_axle]
+        inside = bool(np.all(normals @ f <= ratio * params[Param.radius_front]))
+        if not load_transfer:  # the radius of the guess's loads; with transfer, F_x moves it
+            assert bool(np.all((rows.lower <= front) & (front <= rows.upper))) == inside
+        inside_count += inside
+        # Zero slip: the rear polygon holds F_xr = 0 at any radius.
+        assert np.all((rows.lower <= values[rows.per_axle:])
+                      & (values[rows.per_axle:] <= rows.upper))
+    assert 0 < inside_count < 400  # both inside and outside points were drawn
+
+
+def test_an_odd_polygon_is_rejected() -> None:
+    from mufusion.planner.ocp import PlannerConfig
+
+    with pytest.raises(ValueError, match="polygon_sides must be an even number >= 12"):
+        PlannerConfig(polygon_sides=13)

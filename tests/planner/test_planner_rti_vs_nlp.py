@@ -46,8 +46,10 @@ def _closed_loop(planner, steps=30):
 
 
 @pytest.mark.parametrize("backend", ["casadi"])
-def test_rti_closed_loop_matches_reference_nlp(backend):
-    config = dict(lane_d_min_m=-0.45, lane_d_max_m=0.45, use_sampling=False)
+@pytest.mark.parametrize("load_transfer", [True, False])  # one row per face / slabs (ocp.py)
+def test_rti_closed_loop_matches_reference_nlp(backend, load_transfer):
+    config = dict(lane_d_min_m=-0.45, lane_d_max_m=0.45, use_sampling=False,
+                  load_transfer=load_transfer)
     rti = TractionAdaptivePlanner(TRUCK, PlannerConfig(**config))
     ref = TractionAdaptivePlanner(TRUCK, PlannerConfig(backend=backend, **config))
     a, b = _closed_loop(rti), _closed_loop(ref)

@@ -24,11 +24,11 @@ from mufusion.planner.front_force import (
 from mufusion.planner.ocp import (
     MAX_SPEED_MPS,
     N_PARAMS,
-    POLYGON_ROW_LOWER_BOUND,
     Param,
     PlannerConfig,
     constraint_expressions,
     longitudinal_force_bounds_n,
+    polygon_rows,
     slack_penalties,
 )
 from mufusion.vehicle.params import VehicleParams
@@ -41,7 +41,7 @@ from mufusion.vehicle.planner_model import (
 )
 
 _log = logging.getLogger(__name__)
-_FORMAT_VERSION = "6"
+_FORMAT_VERSION = "7"
 
 # The problem's and the iterate's batch access compiled into the solver (acados' custom-update
 # hook). One call writes the whole problem and initial guess, one reads the whole solution,
@@ -427,14 +427,15 @@ def _describe(
         [Input.fyf, Input.fxf, Input.fxr] if config.steering_rate_limit else [Input.fxf, Input.fxr]
     )
     ocp.constraints.lbu, ocp.constraints.ubu = _input_bounds(params, config)
-    ocp.constraints.lh = np.full(2 * ns, POLYGON_ROW_LOWER_BOUND)
-    ocp.constraints.uh = np.zeros(2 * ns)
+    rows = polygon_rows(ns, load_transfer=config.load_transfer)
+    ocp.constraints.lh = np.full(rows.count, rows.lower)
+    ocp.constraints.uh = np.full(rows.count, rows.upper)
     # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
     # follows the state, which at stage 0 is fixed, so the rear polygon is soft. acados
     # orders a stage's slacks as the soft bounds (d) first, then the soft h rows, which is
     # the layout of SlackPenalties.
-    ocp.constraints.idxsh = np.arange(ns, 2 * ns)
-    penalties = slack_penalties(config.weights, ns)
+    ocp.constraints.idxsh = np.arange(rows.per_axle, rows.count)
+    penalties = slack_penalties(config.weights, rows.per_axle)
     ocp.cost.zl = ocp.cost.zu = penalties.linear_stage
     ocp.cost.Zl = ocp.cost.Zu = penalties.quadratic_stage
     ocp.cost.zl_e = ocp.cost.zu_e = penalties.linear_terminal

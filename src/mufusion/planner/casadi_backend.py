@@ -21,11 +21,11 @@ from mufusion.planner.front_force import (
 from mufusion.planner.ocp import (
     MAX_SPEED_MPS,
     N_PARAMS,
-    POLYGON_ROW_LOWER_BOUND,
     Param,
     PlannerConfig,
     constraint_expressions,
     longitudinal_force_bounds_n,
+    polygon_rows,
     slack_penalties,
 )
 from mufusion.vehicle.params import VehicleParams
@@ -42,7 +42,8 @@ class CasadiBackend:
 
         self.params, self.config = params, config
         n, ns, dt = config.horizon_steps, config.polygon_sides, config.dt_s
-        pen = slack_penalties(config.weights, ns)
+        rows = polygon_rows(ns, load_transfer=config.load_transfer)
+        pen = slack_penalties(config.weights, rows.per_axle)
         augmented = config.steering_rate_limit
         nx = ocp_state_count(config)
         x = ca.SX.sym("x", nx)
@@ -72,7 +73,9 @@ class CasadiBackend:
         U = ca.SX.sym("U", N_INPUTS, n)
         S_lo = ca.SX.sym("S_lo", n)  # d-bound slacks, stages 1..N
         S_hi = ca.SX.sym("S_hi", n)
-        S_r = ca.SX.sym("S_r", ns, n)  # rear-polygon slacks, stages 0..N-1
+        # Rear-polygon slacks, stages 0..N-1, on each row's lower and upper side (as acados).
+        S_rl = ca.SX.sym("S_rl", rows.per_axle, n)
+        S_ru = ca.SX.sym("S_ru", rows.per_axle, n)
         P = ca.SX.sym("P", N_PARAMS, n)
         YREF = ca.SX.sym("YREF", ny, n + 1)
         WD = ca.SX.sym("WD", ny)
@@ -89,19 +92,22 @@ class CasadiBackend:
         for k in range(n):
             r = ca.vertcat(X[:N_STATES, k], forces(X[:, k], U[:, k])) - YREF[:, k]
             cost += dt * 0.5 * ca.sum1(WD * r**2)
-            cost += dt * slack_cost(
-                S_r[:, k], pen.linear_stage[rear], pen.quadratic_stage[rear]
-            )
+            for slack in (S_rl[:, k], S_ru[:, k]):
+                cost += dt * slack_cost(slack, pen.linear_stage[rear], pen.quadratic_stage[rear])
             g.append(X[:, k + 1] - step(X[:, k], U[:, k], P[:, k]))
             lbg += [0.0] * nx
             ubg += [0.0] * nx
             hk = h(X[:, k], U[:, k], P[:, k])
-            g.append(hk[:ns])
-            lbg += [POLYGON_ROW_LOWER_BOUND] * ns
-            ubg += [0.0] * ns
-            g.append(hk[ns:] - S_r[:, k])
-            lbg += [POLYGON_ROW_LOWER_BOUND] * ns
-            ubg += [0.0] * ns
+            m = rows.per_axle
+            g.append(hk[:m])
+            lbg += [rows.lower] * m
+            ubg += [rows.upper] * m
+            g.append(hk[m:] + S_rl[:, k])
+            lbg += [rows.lower] * m
+            ubg += [np.inf] * m
+            g.append(hk[m:] - S_ru[:, k])
+            lbg += [-np.inf] * m
+            ubg += [rows.upper] * m
             # d bounds at stage k+1 (softened); terminal slacks carry no dt factor.
             if k < n - 1:
                 scale, z1, z2 = dt, pen.linear_stage[corridor], pen.quadratic_stage[corridor]
@@ -120,7 +126,7 @@ class CasadiBackend:
         self._nx, self._augmented = nx, augmented
         self._n_x = nx * (n + 1)
         self._n_u = N_INPUTS * n
-        z = ca.vertcat(ca.vec(X), ca.vec(U), S_lo, S_hi, ca.vec(S_r))
+        z = ca.vertcat(ca.vec(X), ca.vec(U), S_lo, S_hi, ca.vec(S_rl), ca.vec(S_ru))
         par = ca.vertcat(ca.vec(P), ca.vec(YREF), WD, X0, DLO, DHI)
         self._lbg, self._ubg = np.array(lbg), np.array(ubg)
         self._n_z = z.shape[0]
@@ -134,7 +140,7 @@ class CasadiBackend:
         lbu = np.tile([-rate, lower[0], lower[1]], (n, 1))
         ubu = np.tile([rate, upper[0], upper[1]], (n, 1))
         self._lbu, self._ubu = lbu, ubu
-        self._n_slack = 2 * n + ns * n
+        self._n_slack = 2 * n + 2 * rows.per_axle * n
 
     def solve(self, x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi, min_speed_mps,
               max_drive_force_n=None):

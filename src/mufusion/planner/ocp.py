@@ -38,7 +38,8 @@ PLANNER_MODES: tuple[str, ...] = ("cruise", "evade", "emergency", "minimal_risk"
 
 # Upper bound on v_x at stages 1..N [m/s]: inactive in practice, it keeps the box finite.
 MAX_SPEED_MPS = 100.0
-# Lower bound of each (normalised) friction-polygon row: inactive, acados needs a finite one.
+# Lower bound of a one-sided (normalised) friction-polygon row: inactive, acados needs a finite
+# one (this build does not mask infinite bounds; a bound of -1e10 made HPIPM 3.6x slower).
 POLYGON_ROW_LOWER_BOUND = -1e3
 
 
@@ -197,8 +198,10 @@ class PlannerConfig:
             raise ValueError(
                 f"utilization_factor must be in (0, 1], got {self.utilization_factor}"
             )
-        if self.polygon_sides < 12:
-            raise ValueError(f"polygon_sides must be >= 12, got {self.polygon_sides}")
+        if self.polygon_sides < 12 or self.polygon_sides % 2:
+            raise ValueError(
+                f"polygon_sides must be an even number >= 12, got {self.polygon_sides}"
+            )
         if self.backend not in ("acados", "casadi"):
             raise ValueError(f"backend must be 'acados' or 'casadi', got {self.backend!r}")
         if not 0.0 < self.max_cruise_accel_mps2 <= 10.0:
@@ -372,29 +375,70 @@ def lateral_corridor(
     return lo, hi
 
 
+@dataclass(frozen=True)
+class PolygonRows:
+    """How the friction polygons enter the OCP: ``lower ≤ h ≤ upper`` row by row.
+
+    ``per_axle`` rows for the front axle (hard), then as many for the rear (soft). Where the
+    radii are parameters (no load transfer) an even polygon's opposite faces are parallel
+    (``n_{j+n/2} = -n_j``), so ``n_j · f ≤ R cos(π/n)`` for all ``j`` is ``|n_j · f| ≤ R cos(π/n)``
+    for ``j < n/2``: half the rows, each two-sided, with the same feasible set and no artificial
+    bound (``two_sided``). With load transfer the radius depends on the stage's own forces, so a
+    face and its opposite bind at different affine bounds and each face is its own one-sided row
+    (``n·f − R(f) ≤ 0``, lower bound :data:`POLYGON_ROW_LOWER_BOUND`).
+    """
+
+    per_axle: int
+    lower: float
+    upper: float
+    two_sided: bool
+
+    @property
+    def count(self) -> int:
+        """Rows of both axles."""
+        return 2 * self.per_axle
+
+
+def polygon_rows(n_sides: int, *, load_transfer: bool) -> PolygonRows:
+    """The row layout of :func:`constraint_expressions` (the one place both backends read it).
+
+    Examples
+    --------
+    >>> polygon_rows(12, load_transfer=False)
+    PolygonRows(per_axle=6, lower=-0.9659258262890683, upper=0.9659258262890683, two_sided=True)
+    >>> polygon_rows(12, load_transfer=True).count
+    24
+    """
+    if n_sides % 2:
+        raise ValueError(f"polygon_sides must be even, got {n_sides}")
+    ratio = polygon_directions(n_sides)[1]
+    if load_transfer:
+        return PolygonRows(n_sides, POLYGON_ROW_LOWER_BOUND, 0.0, two_sided=False)
+    return PolygonRows(n_sides // 2, -ratio, ratio, two_sided=True)
+
+
 def constraint_expressions(
     x: Any, u: Any, p: Any, params: VehicleParams, n_sides: int, *, load_transfer: bool
 ) -> Any:
-    """Friction polygons normalised by their radii, as CasADi expressions: ``h ≤ 0``.
+    """Friction polygons normalised by their radii, as CasADi rows (bounds: :func:`polygon_rows`).
 
-    Rows: the front polygon over ``(F_xf, F_yf)`` (``n_sides`` rows, hard), then the rear polygon
-    over ``(F_xr, F_yr(x))`` (``n_sides`` rows, soft; see :func:`slack_penalties`). Without
-    ``load_transfer`` the radii are the parameters (at the guess's axle loads); with it, each
-    radius is ``λ μ̂ F_z`` at the loads of the stage's own ``F_xf + F_xr`` (linear in the forces,
-    floored at 5 % of the weight as in :func:`stage_parameters`), the rows still divided by the
-    parameter radii.
+    Rows: the front polygon over ``(F_xf, F_yf)`` (hard), then the rear polygon over
+    ``(F_xr, F_yr(x))`` (soft; see :func:`slack_penalties`). Without ``load_transfer`` the radii
+    are the parameters (at the guess's axle loads) and the rows are the slabs
+    ``n_j · f / R`` (``j < n/2``) within ``±cos(π/n)``; with it, each radius is ``λ μ̂ F_z`` at the
+    loads of the stage's own ``F_xf + F_xr`` (linear in the forces, floored at 5 % of the weight
+    as in :func:`stage_parameters`) and the ``n`` rows are ``(n_j · f − R(f)) / R ≤ 0``, divided
+    by the parameter radii.
     """
     import casadi as ca
 
     normals, ratio = polygon_directions(n_sides)
     fyr = rear_lateral_force_n(x, p[Param.rear_stiffness], params)
     if not load_transfer:
-        front = [
-            (nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front] - ratio
-            for nx, ny in normals
-        ]
-        rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] - ratio
-                for nx, ny in normals]
+        half = normals[: polygon_rows(n_sides, load_transfer=False).per_axle]
+        front = [(nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front]
+                 for nx, ny in half]
+        rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] for nx, ny in half]
         return ca.vertcat(*front, *rear)
     floor = MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2
     fzf, fzr = normal_loads_n((u[Input.fxf] + u[Input.fxr]) / params.mass_kg, params)
@@ -413,8 +457,8 @@ def constraint_expressions(
 class SlackPenalties:
     """Exact-penalty weights of the soft constraints, per slack variable (lower = upper side).
 
-    Soft at stages 1..N−1: the corridor bound on ``d`` (one slack), then the ``n_sides`` rear
-    polygon rows; at the terminal stage N: the corridor bound only. The penalty of a slack
+    Soft at stages 1..N−1: the corridor bound on ``d`` (one slack), then the rear polygon's rows
+    (:func:`polygon_rows`); at the terminal stage N: the corridor bound only. The penalty of a slack
     ``σ ≥ 0`` is ``linear σ + quadratic σ² / 2``; acados multiplies stage penalties by ``dt``
     (the terminal one not), and the reference backend does the same.
     """
@@ -435,16 +479,16 @@ class SlackPenalties:
         return slice(1, None)
 
 
-def slack_penalties(weights: CostWeights, n_sides: int) -> SlackPenalties:
+def slack_penalties(weights: CostWeights, rear_rows: int) -> SlackPenalties:
     """The one place the soft constraints and their penalties are laid out (both backends).
 
     Examples
     --------
-    >>> pen = slack_penalties(CostWeights(), 12)
+    >>> pen = slack_penalties(CostWeights(), 6)
     >>> pen.linear_stage.shape, pen.linear_terminal.shape, float(pen.linear_stage[pen.corridor][0])
-    ((13,), (1,), 10000.0)
+    ((7,), (1,), 10000.0)
     """
-    n_stage = 1 + n_sides
+    n_stage = 1 + rear_rows
     return SlackPenalties(
         linear_stage=np.full(n_stage, weights.slack_l1),
         quadratic_stage=np.full(n_stage, weights.slack_l2),
