@@ -39,7 +39,7 @@ PLANNER_MODES: tuple[str, ...] = ("cruise", "evade", "emergency", "minimal_risk"
 # Upper bound on v_x at stages 1..N [m/s]: inactive in practice, it keeps the box finite.
 MAX_SPEED_MPS = 100.0
 # Lower bound of a one-sided (normalised) friction-polygon row: inactive, acados needs a finite
-# one (this build does not mask infinite bounds; a bound of -1e10 made HPIPM 3.6x slower).
+# one (this build does not mask infinite bounds: at -1e10 a solve took 5.3 instead of 1.85 ms).
 POLYGON_ROW_LOWER_BOUND = -1e3
 
 
