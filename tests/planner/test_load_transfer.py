@@ -162,7 +162,9 @@ def test_a_braking_plan_logs_the_loads_and_limits_of_its_own_braking() -> None:
 def test_the_rows_admit_what_the_polygons_faces_admit(n_sides: int, load_transfer: bool) -> None:
     # Without load transfer the rows are slabs (opposite faces in pairs, two-sided), with it one
     # row per face: either way lower <= h <= upper exactly where every face n_j . f <= R cos(π/n)
-    # holds, for the front (inputs) and the rear polygon (F_yr from the state's slip).
+    # holds, R being the radius the plan is solved with (plan_polygon_radii_n: the guess's loads,
+    # or those of the stage's own F_x). Front polygon over the inputs; the rear one holds F_xr = 0
+    # at zero slip whatever its radius.
     import casadi as ca
 
     x, u, p = ca.SX.sym("x", N_STATES), ca.SX.sym("u", N_INPUTS), ca.SX.sym("p", len(Param))
@@ -170,23 +172,23 @@ def test_the_rows_admit_what_the_polygons_faces_admit(n_sides: int, load_transfe
                                                                 load_transfer=load_transfer)])
     rows = polygon_rows(n_sides, load_transfer=load_transfer)
     normals, ratio = polygon_directions(n_sides)
-    params = _stage()["p"][0].copy()
+    stage = _stage()
+    params = stage["p"][0].copy()
     rng = np.random.default_rng(n_sides)
     inside_count = 0
     for _ in range(400):
         f = rng.uniform(-1.1, 1.1, 2) * params[Param.radius_front]
         forces = np.zeros(N_INPUTS)
-        forces[Input.fyf], forces[Input.fxf] = f[1], f[0]
+        forces[Input.fyf], forces[Input.fxf] = f[1], min(f[0], 0.0)  # the front only brakes
+        f[0] = forces[Input.fxf]
+        radius = plan_polygon_radii_n(np.tile(forces, (N, 1)), stage, TRUCK, load_transfer)[0][0]
         values = np.asarray(h(np.zeros(N_STATES), forces, params)).ravel()
         assert values.size == rows.count
-        front = values[: rows.per_axle]
-        inside = bool(np.all(normals @ f <= ratio * params[Param.radius_front]))
-        if not load_transfer:  # the radius of the guess's loads; with transfer, F_x moves it
-            assert bool(np.all((rows.lower <= front) & (front <= rows.upper))) == inside
+        front, rear = values[: rows.per_axle], values[rows.per_axle:]
+        inside = bool(np.all(normals @ f <= ratio * radius))
+        assert bool(np.all((rows.lower <= front) & (front <= rows.upper))) == inside
+        assert np.all((rows.lower <= rear) & (rear <= rows.upper))
         inside_count += inside
-        # Zero slip: the rear polygon holds F_xr = 0 at any radius.
-        assert np.all((rows.lower <= values[rows.per_axle:])
-                      & (values[rows.per_axle:] <= rows.upper))
     assert 0 < inside_count < 400  # both inside and outside points were drawn
 
 
