@@ -15,6 +15,7 @@ from mufusion.sim.supervision import (
     Prober,
     ProbingSettings,
     planned_footprint_violation_m,
+    plausible_estimate,
     relaxed_estimate,
 )
 from mufusion.vehicle.params import CAR, TRUCK
@@ -90,6 +91,18 @@ def test_relaxation_moves_towards_the_mean_only() -> None:
         LaneRecoverySettings(steps=(0.5, 0.25))
     with pytest.raises(ValueError, match=r"probing\.max_decel_mps2"):
         ProbingSettings(max_decel_mps2=9.0)
+
+
+def test_plausible_estimate_is_the_band_top_never_below_mu_hat() -> None:
+    est = _estimate(mu_hat=0.1, mean=0.3)  # std 0.05
+    np.testing.assert_allclose(plausible_estimate(est).mu_hat, 0.3 + 1.96 * 0.05)
+    high = _estimate(mu_hat=0.5, mean=0.3)  # μ̂ above the band's top: kept
+    np.testing.assert_allclose(plausible_estimate(high).mu_hat, 0.5)
+    assert plausible_estimate(_estimate(fused=False)) is None
+    assert np.all(plausible_estimate(_estimate(mu_hat=0.1, mean=1.99)).mu_hat <= 2.0)
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ValueError, match=r"lane_recovery\.stop_probe_s"):
+            LaneRecoverySettings(stop_probe_s=bad)
 
 
 def _states(d_m, dpsi_rad=0.0) -> np.ndarray:
@@ -214,3 +227,59 @@ def test_after_lane_recovery_the_planner_continues_the_adopted_plan(monkeypatch)
     assert details.str.contains("did not help").sum() >= 3
     assert details.str.contains("relaxed").sum() >= 1
     assert len(adopted) >= 10 and mismatches == []
+
+
+def _popup(config: str, mu: float, speed_mps: float, distance_m: float, *extra: str):
+    return run_scenario(load_scenario("popup", [
+        f"initial_speed_mps={speed_mps}", f"obstacle.distance_m={distance_m}", f"friction.mu={mu}",
+        "obstacle.lateral_offset_m=0.0", "duration_s=4", *extra]), config)
+
+
+@pytest.mark.slow
+def test_braking_probe_earns_the_stop_in_lane_where_the_estimate_alone_evades() -> None:
+    # F-safe at 14 m/s, the obstacle 18 m ahead on dry asphalt (μ 1.0): μ̂ is the dry class's
+    # lower bound (0.6), the posterior mean 0.715, and the stop needs 0.85; the band's top (0.88)
+    # does not rule it out. Without the probe F-safe swerves through the opposing lane.
+    probed = _popup("F-safe", 1.0, 14.0, 18.0)
+    plain = _popup("F-safe", 1.0, 14.0, 18.0, "lane_recovery.stop_probe_s=0")
+    with_probe, without = compute_metrics(probed), compute_metrics(plain)
+    assert without.max_lane_excursion_m > 1.0 and not without.collision
+    assert with_probe.max_lane_excursion_m == 0.0 and not with_probe.collision
+    assert with_probe.final_speed_mps < 0.1
+    ev = probed.events
+    start, end = ev[ev["kind"] == "stop_probe"], ev[ev["kind"] == "stop_probe_end"]
+    assert len(start) == 1 and len(end) == 1
+    t0, t1 = float(start["t_s"].iloc[0]), float(end["t_s"].iloc[0])
+    assert 0.0 < t1 - t0 <= 0.3 + 1e-9
+    assert "the stop fits with μ̂ relaxed" in end["detail"].iloc[0]
+    steps = probed.planning_steps.set_index("t_s")
+    # The probe brakes in lane, and the local estimate it earns is in the posterior that
+    # grants the stop: the mean under the vehicle rises from the camera's 0.715 towards 0.975.
+    assert (steps.loc[t0:t1 - 1e-9, "mode"] == "emergency").all()
+    assert not steps.loc[t0, "local_available"] and steps.loc[t1, "local_available"]
+    est = probed.estimates
+    mean_here = est[est["s_ahead_m"] == 0.0].set_index("t_s")["mean"]
+    assert mean_here.loc[t0] < 0.75 < 0.9 < mean_here.loc[t1]
+    assert not plain.events["kind"].isin(["stop_probe", "stop_probe_end"]).any()
+
+
+@pytest.mark.slow
+def test_braking_probe_that_measures_too_little_friction_ends_in_the_evasion() -> None:
+    # At 14 m/s with the obstacle 18 m ahead on μ 0.75 the measured friction does not grant
+    # the stop: the probe ends within its bound and the vehicle steers around the obstacle.
+    log = _popup("F-safe", 0.75, 14.0, 18.0)
+    ev = log.events
+    start, end = ev[ev["kind"] == "stop_probe"], ev[ev["kind"] == "stop_probe_end"]
+    assert len(start) == 1 and len(end) == 1
+    assert float(end["t_s"].iloc[0]) - float(start["t_s"].iloc[0]) <= 0.3 + 1e-9
+    assert "evading" in end["detail"].iloc[0]
+    steps = log.planning_steps
+    after = steps[steps["t_s"] >= float(end["t_s"].iloc[0])]
+    assert (after["mode"].iloc[:5] == "evade").all()
+    assert not compute_metrics(log).collision
+
+
+@pytest.mark.slow
+def test_no_braking_probe_without_a_posterior() -> None:
+    log = _popup("P", 1.0, 19.0, 35.0)
+    assert not log.events["kind"].isin(["stop_probe", "stop_probe_end"]).any()

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from mufusion.fusion import Z95
 from mufusion.plots._common import (
     check_time,
     config_name,
@@ -15,9 +16,6 @@ from mufusion.plots._common import (
     save_figure,
 )
 from mufusion.sim.log import RunLog
-
-# Two-sided 95 % quantile of the standard normal: the band of the posterior (paper Sec. III-B).
-_Z95 = 1.96
 
 
 def build_estimate_figure(log: RunLog, time_s: float) -> Figure:
@@ -37,7 +35,7 @@ def build_estimate_figure(log: RunLog, time_s: float) -> Figure:
 
     fig = Figure(figsize=(7.5, 4.8), layout="constrained")
     ax = fig.subplots()
-    ax.fill_between(s, mean - _Z95 * std, mean + _Z95 * std, color="tab:blue", alpha=0.2,
+    ax.fill_between(s, mean - Z95 * std, mean + Z95 * std, color="tab:blue", alpha=0.2,
                     lw=0, label="posterior 95 % band (mean ± 1.96 std)")
     ax.plot(s, mean, color="tab:blue", lw=1.4, label="posterior mean", gid="mean")
     ax.step(s, est["mu_true"], where="post", color="black", lw=1.6, label="true μ", gid="true")

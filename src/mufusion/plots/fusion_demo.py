@@ -21,11 +21,9 @@ from matplotlib.figure import Figure
 
 from mufusion.configurations import FrictionEstimate, make_configuration
 from mufusion.estimators import CAMERA_RANGE_M
-from mufusion.fusion import LOCAL_GROUP, PAPER_PRIOR, FusionData
+from mufusion.fusion import LOCAL_GROUP, PAPER_PRIOR, Z95, FusionData
 from mufusion.plots._common import save_figure
 
-# Two-sided 95 % quantile of the standard normal (paper Sec. III: margins are 95 % intervals).
-_Z95 = 1.96
 FUSION_DEMO_MODES: tuple[str, ...] = ("paper", "safe", "both")
 _MODE_CONFIGURATION = {"paper": "F", "safe": "F-safe"}
 # The same colours in both panels, so that one legend serves both (panel titles name the mode).
@@ -81,11 +79,11 @@ def _draw_panel(ax: Axes, mode: str, mu_true: np.ndarray, est: FrictionEstimate,
     if fused is None or data is None:
         raise ValueError("the demonstration needs a fused configuration (F or F-safe)")
     prior_mean, prior_std = float(prior.mean), float(prior.std)
-    ax.axhspan(prior_mean - _Z95 * prior_std, prior_mean + _Z95 * prior_std, color="0.85",
+    ax.axhspan(prior_mean - Z95 * prior_std, prior_mean + Z95 * prior_std, color="0.85",
                lw=0, label="prior 95 % band", gid="prior")
     ax.axhline(prior_mean, color="0.6", lw=1.0, ls=":", label="prior mean")
     mean, std = np.asarray(fused.mean), np.asarray(fused.std)
-    ax.fill_between(s, mean - _Z95 * std, mean + _Z95 * std, color=_POSTERIOR_COLOR,
+    ax.fill_between(s, mean - Z95 * std, mean + Z95 * std, color=_POSTERIOR_COLOR,
                     alpha=0.22, lw=0, label="posterior 95 % band", gid="posterior_band")
     ax.plot(s, mean, color=_POSTERIOR_COLOR, lw=1.2, label="posterior mean", gid="posterior_mean")
     local = _local_mask(data)

@@ -40,6 +40,7 @@ from mufusion.sim.supervision import (
     Prober,
     ProbingSettings,
     planned_footprint_violation_m,
+    plausible_estimate,
     relaxed_estimate,
 )
 from mufusion.sim.world import World
@@ -154,6 +155,9 @@ class ClosedLoop:
         self._planner_usable = True
         self._local_available = False
         self._last_mode: PlanningMode = "cruise"
+        self._stop_probe_since: float | None = None  # the braking probe's start, while it runs
+        self._stop_probe_spent = False  # a probe ran and did not earn the stop: none again
+        self._stop_alpha: float | None = None  # the relaxation of the stop in lane, while held
         for fault in self.faults:
             self._recorder.event(fault.start_s, "fault_scheduled", _describe(fault))
         try:
@@ -231,6 +235,10 @@ class ClosedLoop:
         self._local_available = estimate.local_available
         obstacles = self.world.planner_obstacles(t, s_ego, behind_m=self.params.length_m)
         mode = MINIMAL_RISK_MODE if self._minimal_risk else self._mode(obstacles, xf, estimate)
+        if mode == "evade" and self.lane_recovery.enabled and not self._minimal_risk:
+            mode, estimate = self._stop_in_lane(t, xf, estimate, obstacles)
+        elif self._stop_probe_since is not None:
+            self._end_stop_probe(t, f"the stop-or-evade rule chose {mode}")
         self._last_mode = mode
         self._consider_probe(t, xf, estimate, obstacles)
         started = time.perf_counter()
@@ -313,6 +321,62 @@ class ClosedLoop:
             "μ̂ towards the posterior mean did not help",
         )
         return plan, estimate
+
+    def _stop_in_lane(
+        self,
+        t: float,
+        xf: np.ndarray,
+        estimate: FrictionEstimate,
+        obstacles: Sequence[PlannerObstacle],
+    ) -> tuple[PlanningMode, FrictionEstimate]:
+        """Stop in lane instead of evading, if a relaxed μ̂ grants it or a braking probe may.
+
+        See :mod:`mufusion.sim.supervision` ("Stopping in lane for an obstacle"). Returns the
+        mode and the estimate to plan with: ``("emergency", relaxed)``, ``("emergency",
+        estimate)`` while probing, else ``("evade", estimate)``.
+        """
+        # Once the evasion is under way it is kept (and without a posterior nothing relaxes).
+        if self._last_mode == "evade" or estimate.fused is None:
+            return "evade", estimate
+        for alpha in self.lane_recovery.steps:
+            relaxed = relaxed_estimate(estimate, alpha)
+            if relaxed is None:
+                break  # the mean adds nothing to μ̂: no α will
+            if self._mode(obstacles, xf, relaxed) == "emergency":
+                self._end_stop_probe(t, f"the stop fits with μ̂ relaxed {alpha:.2f} of the way "
+                                        "to the posterior mean")
+                if alpha != self._stop_alpha:
+                    self._recorder.event(
+                        t, "lane_recovery", f"stop in lane, μ̂ relaxed {alpha:.2f} of the way to "
+                        "the posterior mean (μ̂ grants no stop: evading would leave the lane)")
+                self._stop_alpha = alpha
+                return "emergency", relaxed
+        self._stop_alpha = None
+        since = self._stop_probe_since
+        probing = since is not None
+        may_probe = (
+            not estimate.local_available
+            and not self._stop_probe_spent
+            and self.lane_recovery.stop_probe_s > 0.0
+            and (since is None or t - since < self.lane_recovery.stop_probe_s - 1e-9)
+        )
+        plausible = plausible_estimate(estimate) if may_probe else None
+        if plausible is not None and self._mode(obstacles, xf, plausible) == "emergency":
+            if not probing:
+                self._stop_probe_since = t
+                self._recorder.event(
+                    t, "stop_probe", "neither μ̂ nor the posterior mean grants the stop, the "
+                    "posterior's 95 % band does: braking in lane to measure the friction")
+            return "emergency", estimate
+        self._end_stop_probe(t, "the stop is not granted; evading" if probing else "")
+        return "evade", estimate
+
+    def _end_stop_probe(self, t: float, why: str) -> None:
+        if self._stop_probe_since is not None:
+            self._recorder.event(t, "stop_probe_end", f"{why} after "
+                                 f"{t - self._stop_probe_since:.2f} s")
+            self._stop_probe_since = None
+            self._stop_probe_spent = True
 
     def _footprint_violation_m(self, plan: Plan) -> float:
         states = plan.states[1:]

@@ -25,6 +25,26 @@ only with a posterior (F, F-safe). The footprint's corners are checked, not the 
 point alone: on a curve and yawed against the lane the corners reach up to the body's swing and
 bulge further out, and a plan whose reference point stays within its bounds can still carry
 the body over the edge.
+
+**Stopping in lane for an obstacle** (:func:`relaxed_estimate`, :func:`plausible_estimate`). The
+stop-or-evade rule (:mod:`mufusion.sim.obstacle_response`) evades whenever μ̂ does not grant the
+stop, and for an obstacle in the lane evading means leaving it. Before the vehicle turns away,
+the loop looks for a stop in lane, in this order:
+
+1. μ̂ relaxed towards the posterior mean, the smallest ``α`` of ``steps`` that grants the stop:
+   the vehicle stops in lane with that estimate (the plan brakes with it, too).
+2. Otherwise, when the local estimate is unavailable (the road under the vehicle is unmeasured)
+   and the upper edge of the posterior's 95 % band (mean + 1.96 σ) grants the stop, a *braking
+   probe*: the vehicle brakes in lane with μ̂ as it is, for at most ``stop_probe_s``. Braking
+   does two things for the stop: the brakes' lag is paid (the stop-or-evade test no longer adds
+   it), and the tires' utilisation passes the local estimator's threshold, so the posterior
+   learns the friction under the vehicle. Step 1 decides again at each planning step; if the
+   stop is still not granted once the local estimate has arrived, or the probe's time is up,
+   the vehicle evades, from a little less speed.
+
+Both apply only before an evasion has started: a stop that fits only once the vehicle is turning
+away comes late, and switching mid-manoeuvre is worse than either (measured:
+docs/experiments.md, "F-safe's lane in the pop-up").
 """
 
 from __future__ import annotations
@@ -36,6 +56,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.configurations import FrictionEstimate
+from mufusion.configurations.sources import MU_HAT_MAX
+from mufusion.fusion import Z95
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import State
 
@@ -78,8 +100,16 @@ class LaneRecoverySettings:
     enabled: bool = True
     violation_tolerance_m: float = 0.05
     steps: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0)
+    # Long enough for the brakes' lag and the local estimator's buffer at 10 Hz planning, short
+    # enough that an evasion from the probe's end stays within reach of one from its start.
+    stop_probe_s: float = 0.3
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.stop_probe_s) and 0.0 <= self.stop_probe_s <= 1.0):
+            raise ValueError(
+                "lane_recovery.stop_probe_s must be finite and in [0, 1] s (0: no braking "
+                f"probe), got {self.stop_probe_s!r}"
+            )
         if not (math.isfinite(self.violation_tolerance_m) and self.violation_tolerance_m >= 0.0):
             raise ValueError(
                 "lane_recovery.violation_tolerance_m must be finite and >= 0 m, "
@@ -163,6 +193,30 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     if not np.any(gain > 1e-9):
         return None
     return dataclasses.replace(estimate, mu_hat=mu_hat + alpha * gain)
+
+
+def plausible_estimate(estimate: FrictionEstimate) -> FrictionEstimate | None:
+    """μ̂ raised to the upper edge of the posterior's 95 % band, ``mean + 1.96 σ`` (never
+    lowered, at most ``MU_HAT_MAX``); None without a posterior.
+
+    Not an estimate to plan with: the friction the posterior does not rule out, to ask whether a
+    manoeuvre is worth measuring for (the braking probe of the module docstring).
+
+    Examples
+    --------
+    >>> from mufusion.fusion import FusedEstimate
+    >>> s = np.array([0.0, 10.0])
+    >>> post = FusedEstimate(s, np.array([0.7, 0.7]), np.full(2, 0.1), np.zeros(2), np.zeros(2))
+    >>> est = FrictionEstimate(s, np.array([0.6, 0.9]), False, None, fused=post)
+    >>> np.round(plausible_estimate(est).mu_hat, 6).tolist()
+    [0.896, 0.9]
+    """
+    if estimate.fused is None:
+        return None
+    fused = estimate.fused
+    top = np.asarray(fused.mean, dtype=float) + Z95 * np.asarray(fused.std, dtype=float)
+    mu_hat = np.asarray(estimate.mu_hat, dtype=float)
+    return dataclasses.replace(estimate, mu_hat=np.clip(np.maximum(mu_hat, top), None, MU_HAT_MAX))
 
 
 class Prober:
