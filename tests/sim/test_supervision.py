@@ -283,3 +283,29 @@ def test_braking_probe_that_measures_too_little_friction_ends_in_the_evasion() -
 def test_no_braking_probe_without_a_posterior() -> None:
     log = _popup("P", 1.0, 19.0, 35.0)
     assert not log.events["kind"].isin(["stop_probe", "stop_probe_end"]).any()
+
+
+@pytest.mark.slow
+def test_lane_recovery_holds_its_relaxation_and_gives_it_back_after_the_curve() -> None:
+    # F-safe at 18 m/s with a μ 0.9 turn 5 m ahead (clothoid 5 m): μ̂ ahead is the dry class's
+    # lower bound 0.6, the posterior mean 0.92 once the local estimate measures. Lane recovery
+    # must hold the relaxation it adopts through the curve (re-searching from the unrelaxed μ̂
+    # each step, the loop flipped between plans and left the lane by 37 cm), then return to μ̂
+    # one step of α at a time once the lane allows.
+    log = run_scenario(load_scenario("turn", [
+        "initial_speed_mps=18", "friction.mu_turn=0.9", "turn.start_ahead_m=5",
+        "turn.direction=left", "turn.clothoid_m=5", "vehicle=truck", "duration_s=6"]), "F-safe")
+    assert compute_metrics(log).max_lane_excursion_m < 0.1
+    details = log.events[log.events["kind"] == "lane_recovery"]["detail"]
+    assert details.str.contains("held").sum() >= 5
+    lowered = details[details.str.contains("the lane is kept")]
+    was = lowered.str.extract(r"relaxed (\d\.\d\d) .*\(was (\d\.\d\d)\)").astype(float)
+    steps = (0.0, *LaneRecoverySettings().steps)
+    # Each step-down is one step of α, and the last returns to the unrelaxed μ̂.
+    assert len(was) >= 1
+    assert all(steps.index(b) == steps.index(a) + 1 for a, b in zip(was[0], was[1], strict=True))
+    assert was[0].iloc[-1] == 0.0
+    est = log.estimates
+    last = est[est["t_s"] == est["t_s"].max()]
+    # Back at the class's lower bound beyond the local estimate's reach (safe mode's guarantee).
+    assert float(last[last["s_ahead_m"] == 20.0]["mu_hat"].iloc[0]) == pytest.approx(0.6)

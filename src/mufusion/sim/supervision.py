@@ -21,7 +21,13 @@ planner plans again with μ̂ relaxed towards the posterior mean, ``μ̂ + α (m
 smallest ``α`` of ``steps`` that keeps the lane (the least violating if none does; the candidates
 in increasing ``α``, each from the one before, and the next step continues the one adopted):
 the guarantee of the lower bound is given up only as far as needed to stay on the road, and
-only with a posterior (F, F-safe). The footprint's corners are checked, not the reference
+only with a posterior (F, F-safe). The ``α`` adopted is held: the next step plans with it first
+and searches upwards from it if that plan leaves the lane; if it keeps the lane, one step less
+is tried, and adopted if it keeps the lane too. Without the hold each step started from the
+unrelaxed μ̂, and since its one RTI iteration rarely kept the lane where the relaxed plans of
+the steps before had, the loop flipped between them and never settled on a relaxed plan
+(docs/experiments.md, "Lane recovery holds its relaxation"). Evading (the lane is left by
+design), nothing is held. The footprint's corners are checked, not the reference
 point alone: on a curve and yawed against the lane the corners reach up to the body's swing and
 bulge further out, and a plan whose reference point stays within its bounds can still carry
 the body over the edge.
