@@ -156,7 +156,7 @@ class ClosedLoop:
         self._local_available = False
         self._last_mode: PlanningMode = "cruise"
         self._stop_probe_since: float | None = None  # the braking probe's start, while it runs
-        self._stop_probe_spent = False  # a probe ran and did not earn the stop: none again
+        self._stop_probe_spent = False  # one braking probe per run: its measurement stands
         self._stop_alpha: float | None = None  # the relaxation of the stop in lane, while held
         self._recovery_alpha = 0.0  # lane recovery's relaxation adopted at the last step
         for fault in self.faults:
@@ -309,13 +309,14 @@ class ClosedLoop:
         tolerance = self.lane_recovery.violation_tolerance_m
         before = self._footprint_violation_m(plan)
         alphas = (0.0, *self.lane_recovery.steps)
+        # No friction-limited plan at all (the solve failed) counts as not keeping the lane.
         if before <= tolerance and not plan.fallback:
             if held == 0.0:
                 return plan, estimate
             # The lane is kept with the relaxation held: try one step less of it, so that the
             # guarantee of the lower bound returns as soon as the lane allows.
             lower = alphas[alphas.index(held) - 1]
-            kept = (plan, planned_with, self.planner.memory)
+            memory = self.planner.memory
             candidate_estimate = relaxed_estimate(estimate, lower) if lower > 0.0 else estimate
             assert candidate_estimate is not None
             candidate = self._plan(xf, t, s_ego, candidate_estimate, obstacles, mode)
@@ -325,8 +326,8 @@ class ClosedLoop:
                     t, "lane_recovery", f"the lane is kept with μ̂ relaxed {lower:.2f} of the way "
                     f"to the posterior mean (was {held:.2f})")
                 return candidate, candidate_estimate
-            self.planner.restore(kept[2])
-            return kept[0], kept[1]
+            self.planner.restore(memory)
+            return plan, planned_with
         # Each candidate starts from the one before (a continuation in α: the later candidates
         # have had more iterations), and the next step continues the plan adopted: the planner
         # keeps its latest plan as the next warm start (and that plan's front force as where
