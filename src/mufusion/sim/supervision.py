@@ -61,8 +61,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mufusion.configurations import FrictionEstimate
-from mufusion.configurations.sources import MU_HAT_MAX
+from mufusion.configurations import MU_HAT_MAX, FrictionEstimate
 from mufusion.fusion import Z95
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import State
