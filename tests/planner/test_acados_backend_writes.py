@@ -121,3 +121,18 @@ def test_a_buffer_of_another_layout_is_refused_untouched(mode: float) -> None:
     with pytest.raises(RuntimeError, match="another layout"):
         solver._exchange(data)
     assert not data[1:].any()
+
+
+def test_the_problem_hash_names_the_slack_penalties():
+    """The soft constraints' penalties are generated into the solver, not written at each solve:
+    a configuration that changes them must get its own generated code, not a cached solver
+    with the old penalties (which would silently ignore the change)."""
+    base = acados_backend.problem_hash(TRUCK, CONFIG)
+    assert acados_backend.problem_hash(TRUCK, CONFIG) == base
+    for field in ("slack_l1", "slack_l2"):
+        weights = dataclasses.replace(CONFIG.weights, **{field: 2e4})
+        changed = dataclasses.replace(CONFIG, weights=weights)
+        assert acados_backend.problem_hash(TRUCK, changed) != base, field
+    # The stage weights are written at each solve: they do not need new code.
+    weights = dataclasses.replace(CONFIG.weights, speed=2.0)
+    assert acados_backend.problem_hash(TRUCK, dataclasses.replace(CONFIG, weights=weights)) == base

@@ -178,6 +178,8 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "steering_rate_limit": config.steering_rate_limit,
             "load_transfer": config.load_transfer,
             "utilization": config.utilization_factor,
+            # The slack penalties are written into the generated problem (ocp.cost.zl …).
+            "slack_penalties": [config.weights.slack_l1, config.weights.slack_l2],
             "iterate": _ITERATE_HEADER + _ITERATE_SOURCE,
         },
         sort_keys=True,
