@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
@@ -151,3 +152,14 @@ def test_run_names_are_one_readable_path_component(tmp_path):
     assert "/" not in spec.name and str(tmp_path) not in spec.name
     assert RunSpec("popup", "GT", "x" * 500, index=0).name.endswith("x-GT")
     assert len(RunSpec("popup", "GT", "x" * 500, index=0).name) < 120
+
+
+EXAMPLES = sorted((Path(__file__).parents[2] / "examples").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
+def test_published_campaign_files_validate(path):
+    """Every campaign file the docs tell users to run is valid: it loads, and its variants'
+    scenarios validate (``campaign_specs`` checks each before anything runs, so a typo in a grid
+    key, e.g. ``friction.mu_trun``, fails here and not mid-campaign)."""
+    assert campaign_specs(load_campaign(path))
