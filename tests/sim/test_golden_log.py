@@ -9,7 +9,9 @@ path frame) comes out of the QP solver amplified to that order; a behaviour chan
 by percent. The planned braking split is compared as its sum: the cost weighs front and rear
 longitudinal forces alike, so while neither friction polygon binds the optimum is flat along the
 split and the solver may land anywhere on it at floating-point noise (the total, which moves the
-vehicle, is unique). New columns may be added. When a change
+vehicle, is unique). New columns may be added. The recording's torque columns are the
+controller's commands: they were renamed ``torque_*_cmd_nm`` (values untouched) when
+``torque_*_nm`` became the torques the wheels apply, a new column here. When a change
 is *meant* to alter the closed loop, regenerate the files with
 
     python tests/sim/test_golden_log.py

@@ -41,13 +41,14 @@ class _Planner:
 
 
 class _Controller:
-    def __init__(self, steer_rad: float = 0.0) -> None:
+    def __init__(self, steer_rad: float = 0.0, torque_front_nm: float = 0.0) -> None:
         self.steer_rad = steer_rad
+        self.torque_front_nm = torque_front_nm
         self.times: list[float] = []
 
     def command(self, t_s, x_frenet, steer_rad_now, plan, curvature, torques_now_nm=None):
         self.times.append(t_s)
-        return ActuatorCommand(self.steer_rad, 0.0, 0.0)
+        return ActuatorCommand(self.steer_rad, self.torque_front_nm, 0.0)
 
 
 class _Friction:
@@ -66,11 +67,11 @@ class _Friction:
 RATES = LoopRates(200.0, 50.0, 10.0)
 
 
-def _loop(obstacles=(), steer_rad=0.0, rates=RATES):
+def _loop(obstacles=(), steer_rad=0.0, rates=RATES, torque_front_nm=0.0):
     road = straight_road(300.0, friction=FrictionMap.step(1.0, 0.5, 40.0), obstacles=obstacles)
     world = World(road, to_planner_obstacle=lambda o: PlannerObstacle(o.s_m, o.d_m, 1.0, 1.0))
     plant = Plant(TRUCK, initial_state(TRUCK, 20.0, 0.0, 0.0, 15.0), dt_s=1.0 / rates.plant_hz)
-    planner, controller, friction = _Planner(), _Controller(steer_rad), _Friction()
+    planner, controller, friction = _Planner(), _Controller(steer_rad, torque_front_nm), _Friction()
     loop = ClosedLoop(
         world=world, params=TRUCK, plant=plant, planner=planner, controller=controller,
         friction=friction, rates=rates, reference_speed_mps=15.0, lane_bounds_m=(-0.45, 0.45),
@@ -105,6 +106,19 @@ def test_true_friction_under_axles_is_logged() -> None:
     front_drop = ts["t_s"][ts["mu_front"] < 0.75].min()
     rear_drop = ts["t_s"][ts["mu_rear"] < 0.75].min()
     assert front_drop < rear_drop
+
+
+def test_the_log_holds_the_applied_torques_and_the_commands_apart() -> None:
+    # A brake step: the command is logged as given at every tick, the wheel torque as the plant
+    # applies it, a first-order lag from zero (logging the command as the torque made a braking
+    # that had not yet arrived look applied).
+    loop, *_ = _loop(torque_front_nm=-10_000.0)
+    ts = loop.run(0.5).timeseries
+    np.testing.assert_array_equal(ts["torque_front_cmd_nm"], -10_000.0)
+    np.testing.assert_array_equal(ts["torque_rear_cmd_nm"], 0.0)
+    lag = -10_000.0 * (1.0 - np.exp(-ts["t_s"] / TRUCK.torque_time_constant_s))
+    np.testing.assert_allclose(ts["torque_front_nm"], lag, atol=5.0)
+    assert ts["torque_front_nm"].iloc[0] == 0.0 and ts["torque_front_nm"].iloc[-1] < -9_000.0
 
 
 def test_utilization_reaches_the_estimator() -> None:

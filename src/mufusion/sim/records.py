@@ -57,7 +57,11 @@ class Tick:
     steer_rad: float
     steer_cmd_rad: float
     torque_front_nm: float
+    """Wheel torque the front axle applies [N m] (the plant's lagged state; braking negative)."""
     torque_rear_nm: float
+    torque_front_cmd_nm: float
+    """The controller's front torque command [N m], which the plant follows with its lag."""
+    torque_rear_cmd_nm: float
     util_front: float
     util_rear: float
     mu_front: float
