@@ -12,6 +12,7 @@ from mufusion.fusion import (
     FusionData,
     assemble_inputs,
     assemble_inputs_batch,
+    local_surface_bound,
 )
 
 GRID = DEFAULT_GRID_M
@@ -91,6 +92,37 @@ def test_safe_mode_stops_local_at_first_class_change():
     b = assemble_inputs(GRID, mu, margin, local_mu=0.8, mode="paper")
     np.testing.assert_array_equal(a.mu, b.mu)
     np.testing.assert_array_equal(a.groups, b.groups)
+
+
+@pytest.mark.parametrize("mode", ["paper", "safe"])
+def test_local_surface_bound_covers_the_measured_class_only(mode: str) -> None:
+    # Camera: 0.8 ± 0.2 up to 30 m, then 0.5 ± 0.1; the local estimate 0.925 ± 0.025 within 5 m.
+    mu, margin = _classes(30.0)
+    d = assemble_inputs(GRID, mu, margin, local_mu=0.925, mode=mode)
+    bound = local_surface_bound(d, GRID)
+    # 0.925 − 0.025 under the vehicle and over the rest of its class (to 29 m) ...
+    np.testing.assert_allclose(bound[GRID < 30.0], 0.9)
+    # ... nothing from the first change of class on.
+    assert np.isinf(bound[GRID >= 30.0]).all()
+
+
+def test_local_surface_bound_stops_at_a_class_change_within_reach() -> None:
+    # The class changes 2 m ahead, inside the local estimate's 5 m reach: safe mode stops the
+    # local data there, and so does the bound (paper mode keeps the local points to 4 m).
+    mu, margin = _classes(2.0)
+    safe = local_surface_bound(assemble_inputs(GRID, mu, margin, local_mu=0.8, mode="safe"), GRID)
+    np.testing.assert_allclose(safe[:2], 0.775)
+    assert np.isinf(safe[2:]).all()
+    paper = local_surface_bound(assemble_inputs(GRID, mu, margin, local_mu=0.8), GRID)
+    np.testing.assert_allclose(paper[:5], 0.775)
+    assert np.isinf(paper[5:]).all()
+
+
+def test_local_surface_bound_without_a_local_estimate_says_nothing() -> None:
+    mu, margin = _classes(None)
+    d = assemble_inputs(GRID, mu, margin, mode="safe")
+    assert np.isinf(local_surface_bound(d, GRID)).all()
+    assert np.isinf(local_surface_bound(FusionData([0.0, 1.0], [0.5, 0.5], 0.1), GRID)).all()
 
 
 def test_default_s_local():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mufusion.configurations import FrictionEstimate
-from mufusion.fusion import FusedEstimate
+from mufusion.fusion import FusedEstimate, assemble_inputs
 from mufusion.metrics import compute_metrics
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
@@ -89,6 +89,30 @@ def test_relaxation_moves_towards_the_mean_only() -> None:
     assert relaxed_estimate(_estimate(fused=False), 1.0) is None
     with pytest.raises(ValueError, match=r"lane_recovery\.steps"):
         LaneRecoverySettings(steps=(0.5, 0.25))
+
+
+def test_relaxation_never_trusts_the_local_estimate_beyond_its_declared_error() -> None:
+    # The adversarial over-estimate of the turn grid: μ 0.9 under and ahead of the vehicle, the
+    # local estimate 0.925 ± 0.025, the camera's dry class 0.8 ± 0.2 up to 30 m and a wet class
+    # 0.5 ± 0.1 beyond. The posterior mean follows the local value (0.92); the relaxation may
+    # carry the measured surface forward over its class, but only at 0.925 − 0.025 = 0.9.
+    camera_mu = np.where(GRID < 30.0, 0.8, 0.5)
+    camera_margin = np.where(GRID < 30.0, 0.2, 0.1)
+    data = assemble_inputs(GRID, camera_mu, camera_margin, local_mu=0.925, mode="safe")
+    mean = np.where(GRID < 30.0, 0.92, 0.7)
+    post = FusedEstimate(GRID, mean, np.full(51, 0.02), np.full(51, 0.6), np.full(51, 0.6))
+    est = FrictionEstimate(GRID, np.full(51, 0.6), True, 0.925, fused=post, data=data)
+    full = relaxed_estimate(est, 1.0)
+    assert full is not None
+    # Capped: the mean's 0.92 would over-estimate.
+    np.testing.assert_allclose(full.mu_hat[GRID < 30.0], 0.9)
+    np.testing.assert_allclose(full.mu_hat[GRID >= 30.0], 0.7)  # another surface: the mean
+    np.testing.assert_allclose(relaxed_estimate(est, 0.5).mu_hat[GRID < 30.0], 0.75)
+    # Without the local estimate the mean is the target, as before.
+    unmeasured = FrictionEstimate(GRID, np.full(51, 0.6), False, None, fused=post,
+                                  data=assemble_inputs(GRID, camera_mu, camera_margin,
+                                                       mode="safe"))
+    np.testing.assert_allclose(relaxed_estimate(unmeasured, 1.0).mu_hat, mean)
     with pytest.raises(ValueError, match=r"probing\.max_decel_mps2"):
         ProbingSettings(max_decel_mps2=9.0)
 

@@ -24,6 +24,7 @@ from mufusion.fusion.assembly import (
     FusionDataBatch,
     assemble_inputs,
     assemble_inputs_batch,
+    local_surface_bound,
 )
 from mufusion.fusion.batch import fuse_batch
 from mufusion.fusion.core import GPFusion, fuse
@@ -79,4 +80,5 @@ __all__ = [
     "assemble_inputs_batch",
     "fuse",
     "fuse_batch",
+    "local_surface_bound",
 ]

@@ -264,3 +264,39 @@ def assemble_inputs_batch(
     )
     mu, margin, groups, _ = _assemble(grid, pmu, pmar, local, local_margin, s_local_m, mode)
     return FusionDataBatch(grid, mu, margin, groups)
+
+
+def local_surface_bound(data: FusionData, s_eval_m: np.ndarray) -> np.ndarray:
+    """What the local estimate guarantees of μ on the surface it measured, at ``s_eval_m`` [-].
+
+    The local estimate measures μ under the tires; within its declared error ``m_l`` the surface
+    there has ``μ ≥ μ_l − m_l`` (the largest such bound when it holds several points). The camera
+    reports that surface's class up to its first change of class (or of coverage): the points
+    labelled ``LOCAL_GROUP`` and the class segment labelled ``LOCAL_GROUP + 1`` (the segment the
+    vehicle stands on, contiguous from s = 0 by construction). Over that stretch the bound is
+    carried forward; beyond it, and everywhere when the data hold no local point or no group
+    labels, the local estimate says nothing: ``+inf``.
+
+    Not a bound the fusion guarantees ahead: the surface of one class can still change within it.
+    It is the friction the measured surface supports within the local estimator's declared error,
+    which is what a departure from the guaranteed μ̂ (lane recovery) may assume at most there.
+
+    Examples
+    --------
+    >>> d = assemble_inputs([0.0, 1.0, 2.0, 3.0], [0.5, 0.5, 0.5, 0.8], [0.1, 0.1, 0.1, 0.2],
+    ...                     local_mu=0.42, s_local_m=1.5, mode="safe")
+    >>> local_surface_bound(d, np.array([0.0, 2.0, 2.5, 3.0])).round(3).tolist()
+    [0.395, 0.395, inf, inf]
+    """
+    s_eval = np.asarray(s_eval_m, dtype=float)
+    out = np.full(s_eval.shape, np.inf)
+    if data.groups is None:
+        return out
+    local = data.groups == LOCAL_GROUP
+    if not local.any():
+        return out
+    bound = float(np.max(data.mu[local] - data.margin[local]))
+    surface = local | (data.groups == LOCAL_GROUP + 1)
+    s_end = float(np.max(data.s_m[surface]))
+    out[s_eval <= s_end + 1e-9] = bound
+    return out

@@ -17,13 +17,18 @@ probe's cost; it also helps, as the vehicle arrives slower.
 **Lane recovery** (:func:`relaxed_estimate`). When the friction-limited plan cannot keep the
 vehicle within its lane (the plan's own predicted footprint, :func:`planned_footprint_violation_m`,
 leaves the band the planner keeps the body in by more than ``violation_tolerance_m``), the
-planner plans again with μ̂ relaxed towards the posterior mean, ``μ̂ + α (mean − μ̂)`` for the
+planner plans again with μ̂ relaxed towards the posterior mean, ``μ̂ + α (target − μ̂)`` for the
 smallest ``α`` of ``steps`` that keeps the lane (the least violating if none does; the candidates
 in increasing ``α``, each from the one before, and the next step continues the one adopted):
 the guarantee of the lower bound is given up only as far as needed to stay on the road, and
-only with a posterior (F, F-safe). The ``α`` adopted is held: the next step plans with it first
-and searches upwards from it if that plan leaves the lane; if it keeps the lane, one step less
-is tried, and adopted if it keeps the lane too. Without the hold each step started from the
+only with a posterior (F, F-safe). The target is the posterior mean, but never above what the
+local estimate guarantees on the surface it measured (``μ_l − m_l``, carried over the camera's
+class under the vehicle; :func:`mufusion.fusion.local_surface_bound`): the mean follows the
+local value itself, and trusting that beyond its declared error over-estimated by up to ``m_l``
+(docs/experiments.md, "Lane recovery trusts a measurement within its declared error").
+The ``α`` adopted is held: the next step plans with it first and searches upwards from it if
+that plan leaves the lane; if it keeps the lane, one step less is tried, and adopted if it keeps
+the lane too. Without the hold each step started from the
 unrelaxed μ̂, and since its one RTI iteration rarely kept the lane where the relaxed plans of
 the steps before had, the loop flipped between them and never settled on a relaxed plan
 (docs/experiments.md, "Lane recovery holds its relaxation"). Evading (the lane is left by
@@ -62,7 +67,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.configurations import MU_HAT_MAX, FrictionEstimate
-from mufusion.fusion import Z95
+from mufusion.fusion import Z95, local_surface_bound
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import State
 
@@ -182,6 +187,10 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     """μ̂ moved the fraction ``alpha`` towards the posterior mean (never lowered); None without
     a posterior or when the mean adds nothing.
 
+    The target is the mean capped, where the data hold a local estimate, by what it guarantees
+    on the surface it measured (:func:`mufusion.fusion.local_surface_bound`); beyond that
+    surface, and without a local estimate, it is the mean.
+
     Examples
     --------
     >>> from mufusion.fusion import FusedEstimate
@@ -194,7 +203,10 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     if estimate.fused is None:
         return None
     mu_hat = np.asarray(estimate.mu_hat, dtype=float)
-    gain = np.maximum(np.asarray(estimate.fused.mean, dtype=float) - mu_hat, 0.0)
+    target = np.asarray(estimate.fused.mean, dtype=float)
+    if estimate.data is not None:
+        target = np.minimum(target, local_surface_bound(estimate.data, estimate.s_m))
+    gain = np.maximum(target - mu_hat, 0.0)
     if not np.any(gain > 1e-9):
         return None
     return dataclasses.replace(estimate, mu_hat=mu_hat + alpha * gain)
