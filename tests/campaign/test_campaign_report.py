@@ -61,6 +61,13 @@ def test_campaign_report_writes_rates_intervals_heat_maps_and_html(tmp_path):
         with Image.open(report / "figures" / name) as image:
             assert image.width > 200 and image.height > 100
     assert "![heatmap/collision](figures/heatmap-collision.png)" in md
+    # P against GT on the same starts: it collides in 9 runs whose GT run does not, never the
+    # other way round (sign test p = 2 / 2⁹); the 9 runs are listed, each with GT's clearance.
+    assert "## Against GT, run by run" in md
+    assert "| P | collision | 40 | 9 | 0 | 0 | 0.0039 |" in md
+    assert "| F | collision | 40 | 0 | 0 | 0 | – |" in md
+    assert "Runs that fail where GT does not (9)" in md
+    assert md.count("| popup | P | `friction.mu=") == 9
 
 
 def test_partial_campaign_is_flagged_and_a_missing_directory_exits_2(tmp_path):

@@ -14,7 +14,9 @@ from mufusion.campaign.stats import (
     graded_columns,
     graded_summary,
     outcome_rates,
+    paired_against_reference,
     wilson_interval,
+    worse_than_reference,
 )
 
 
@@ -92,3 +94,48 @@ def test_graded_outcomes_are_the_numeric_metrics_without_parameters_or_timings()
     assert row["p95"] == pytest.approx(np.percentile(clear, 95))
     by_cell = graded_summary(table, by=["config", "friction.mu"], grid=["friction.mu"])
     assert len(by_cell.query("metric == 'fallbacks'")) == 4
+
+
+def _paired_table() -> pd.DataFrame:
+    """Four variants × two seeds of GT and F-safe, outcomes set by hand (below)."""
+    # (variant, seed): (GT out, F-safe out); excursions in m where out, margins where in.
+    lane = {("a", 0): (False, True), ("a", 1): (False, True), ("b", 0): (False, True),
+            ("b", 1): (True, False), ("c", 0): (True, True), ("c", 1): (False, False),
+            ("d", 0): (False, False), ("d", 1): (False, False)}
+    rows = []
+    for (variant, seed), flags in lane.items():
+        for config, out in zip(("GT", "F-safe"), flags, strict=True):
+            depth = 0.01 * (1 + len(rows)) if out else 0.0
+            rows.append({"scenario": "turn", "variant": variant, "seed": seed, "config": config,
+                         "feasibility": "marginal" if variant == "a" else "feasible",
+                         "error": None, "left_lane": out, "collision": False,
+                         "max_lane_excursion_m": depth,
+                         "min_lane_margin_m": -depth if out else 0.02 * (1 + seed),
+                         "impact_speed_mps": np.nan, "min_clearance_m": np.nan})
+    # A failed F-safe run has no outcome and no pair; a GT run without its F-safe run neither.
+    rows.append({**rows[-1], "seed": 7, "error": "RuntimeError: boom", "left_lane": None})
+    rows.append({**rows[0], "variant": "e"})
+    return pd.DataFrame(rows)
+
+
+def test_paired_comparison_counts_each_start_against_its_gt_run():
+    table = _paired_table()
+    paired = paired_against_reference(table).set_index("outcome")
+    lane = paired.loc["lane exit"]
+    # F-safe alone out at (a, 0), (a, 1), (b, 0); GT alone at (b, 1); both at (c, 0).
+    assert (lane["pairs"], lane["worse"], lane["better"], lane["both"]) == (8, 3, 1, 1)
+    assert lane["p_value"] == pytest.approx(0.625)  # 2 · P(X ≥ 3), X ~ B(4, 1/2)
+    assert np.isnan(paired.loc["collision", "p_value"])  # no discordant pair
+    by_class = paired_against_reference(table, by=("feasibility", "config"))
+    marginal = by_class.query("feasibility == 'marginal' and outcome == 'lane exit'").iloc[0]
+    assert (marginal["pairs"], marginal["worse"], marginal["p_value"]) == (2, 2, 0.5)
+    assert paired_against_reference(table[table["config"] == "GT"]).empty
+
+
+def test_runs_worse_than_gt_are_listed_largest_first_with_gts_margin():
+    worse = worse_than_reference(_paired_table())
+    assert worse[["variant", "seed"]].values.tolist() == [["b", 0], ["a", 1], ["a", 0]]
+    assert worse["magnitude"].tolist() == pytest.approx([0.06, 0.04, 0.02])
+    # GT's smallest lane margin on the same start: 0.02 m at seed 0, 0.04 m at seed 1.
+    assert worse["reference_margin"].tolist() == pytest.approx([0.02, 0.04, 0.02])
+    assert set(worse["outcome"]) == {"lane exit"} and set(worse["config"]) == {"F-safe"}

@@ -1,5 +1,6 @@
 """The Monte Carlo page of a campaign (``mufusion campaign-report``): outcome rates with Wilson
-95 % intervals, distributions of the graded outcomes and the figures, as Markdown and HTML.
+95 % intervals, each configuration against GT run by run, distributions of the graded outcomes
+and the figures, as Markdown and HTML.
 
 The numbers come from :mod:`mufusion.campaign.stats`; the figures are drawn by
 :mod:`mufusion.plots.campaign` and passed in by path, so this module never imports plots.
@@ -20,7 +21,14 @@ import markdown
 import pandas as pd
 
 from mufusion.campaign.results import CSV_FILE, SUMMARY_FILE, TABLE_FILE
-from mufusion.campaign.stats import CONFIDENCE, graded_summary, outcome_rates
+from mufusion.campaign.stats import (
+    CONFIDENCE,
+    REFERENCE,
+    graded_summary,
+    outcome_rates,
+    paired_against_reference,
+    worse_than_reference,
+)
 from mufusion.campaign.storage import atomic_write_text
 
 
@@ -142,7 +150,6 @@ def rates_by_class_markdown(table: pd.DataFrame) -> list[str]:
     classes = table["feasibility"].dropna()
     if classes.nunique() < 2:
         return []
-    order = {name: i for i, name in enumerate(("feasible", "marginal", "infeasible"))}
     rates = outcome_rates(table, by=("scenario", "feasibility", "config"))
     lines = ["### By the oracle's class", "",
              "The same rates within each feasibility class of `mufusion.scenarios.feasibility` "
@@ -151,7 +158,7 @@ def rates_by_class_markdown(table: pd.DataFrame) -> list[str]:
         outcomes = list(dict.fromkeys(group["outcome"]))
         keys = sorted(
             dict.fromkeys(zip(group["feasibility"], group["config"], strict=True)),
-            key=lambda k: (order.get(str(k[0]), len(order)), str(k[0])),
+            key=lambda k: _class_rank(k[0]),
         )
         rows = []
         for cls, config in keys:
@@ -162,6 +169,66 @@ def rates_by_class_markdown(table: pd.DataFrame) -> list[str]:
             rows.append(cells)
         lines += [f"**{scenario}**", "", *_table(["class", "config", *outcomes], rows)]
     return lines
+
+
+CLASS_ORDER = ("feasible", "marginal", "infeasible")
+"""The oracle's classes in the order tables list them."""
+MAX_LISTED_RUNS = 30
+"""At most this many runs are listed one by one under "Against GT" (the largest failures)."""
+
+
+def _class_rank(cls: object) -> tuple[int, str]:
+    return (CLASS_ORDER.index(str(cls)) if str(cls) in CLASS_ORDER else len(CLASS_ORDER),
+            str(cls))
+
+
+def _magnitude(outcome: str, value: float) -> str:
+    """How far a failing run went: a lane excursion in cm, an impact speed in m/s."""
+    if not math.isfinite(value):
+        return "–"
+    return f"{100 * value:.1f} cm" if outcome == "lane exit" else f"{value:.1f} m/s"
+
+
+def against_reference_markdown(table: pd.DataFrame, reference: str = REFERENCE) -> list[str]:
+    """Each configuration against the reference on the same variants and starts (``[]`` without
+    both): the pair counts with the sign test, then the runs that fail where the reference does
+    not, largest first, in centimetres (lane) or m/s (impact)."""
+    classes = "feasibility" in table.columns and table["feasibility"].notna().any()
+    by = ("scenario", "feasibility", "config") if classes else ("scenario", "config")
+    paired = paired_against_reference(table, reference, by=by)
+    if paired.empty:
+        return []
+    lines = [f"## Against {reference}, run by run", "",
+             f"Each run is paired with the {reference} run of the same variant and start. "
+             f"*worse*: it fails and {reference} does not; *better*: {reference} fails and it "
+             "does not; *p*: two-sided sign test on worse against better.", ""]
+    for scenario, group in paired.groupby("scenario", sort=False):
+        if classes:
+            group = group.sort_values("feasibility", key=lambda c: c.map(_class_rank),
+                                      kind="stable")
+        rows = [[*([str(r["feasibility"])] if classes else []), str(r["config"]),
+                 str(r["outcome"]), str(r["pairs"]), str(r["worse"]), str(r["better"]),
+                 str(r["both"]), _num(r["p_value"], 2)] for _, r in group.iterrows()]
+        header = [*(["class"] if classes else []), "config", "outcome", "pairs", "worse",
+                  "better", "both", "p"]
+        lines += [f"**{scenario}**", "", *_table(header, rows)]
+    worse = worse_than_reference(table, reference)
+    if worse.empty:
+        return lines
+    shown = worse.head(MAX_LISTED_RUNS)  # by outcome, the largest failure first
+    more = len(worse) - len(shown)
+    lines += [f"Runs that fail where {reference} does not ({len(worse)}"
+              + (f"; the first {len(shown)}" if more else "") + f"); *{reference}'s margin*: "
+              f"its smallest lane margin (lane exit) or clearance (collision) on the same start.",
+              ""]
+    rows = [[str(r["scenario"]), *([str(r["feasibility"])] if classes else []),
+             str(r["config"]), f"`{r['variant']}`", str(r["seed"]), str(r["outcome"]),
+             _magnitude(str(r["outcome"]), r["magnitude"]),
+             "–" if not math.isfinite(r["reference_margin"])
+             else f"{100 * r['reference_margin']:.1f} cm"] for _, r in shown.iterrows()]
+    header = ["scenario", *(["class"] if classes else []), "config", "variant", "seed",
+              "outcome", "how far", f"{reference}'s margin"]
+    return lines + _table(header, rows)
 
 
 def graded_markdown(graded: pd.DataFrame) -> list[str]:
@@ -198,6 +265,7 @@ def report_markdown(data: CampaignResults, figures: Mapping[str, Path], base: Pa
     md += rates_markdown(rates)
     md += _figure_lines(figures, "rates", base)
     md += rates_by_class_markdown(table)
+    md += against_reference_markdown(table)
     md += ["## Graded outcomes", "",
            "Distribution over the runs where the metric is defined (e.g. clearance only for runs "
            "that passed the obstacle); p5/p95 are the 5th and 95th percentiles.", ""]

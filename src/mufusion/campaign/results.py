@@ -17,6 +17,7 @@ import pandas as pd
 
 from mufusion.campaign.specs import RunSpec
 from mufusion.campaign.storage import atomic_write, atomic_write_text
+from mufusion.configurations import Configuration
 from mufusion.metrics import RunMetrics, attach_gt_comparison
 
 SUMMARY_FILE = "summary.json"
@@ -69,7 +70,7 @@ def with_gt_comparison(results: Iterable[RunResult]) -> list[RunResult]:
     gt = {
         _variant_key(r.spec): r.metrics
         for r in results
-        if r.spec.config == "GT" and r.metrics is not None
+        if r.spec.config == Configuration.GT.value and r.metrics is not None
     }
     out = []
     for r in results:

@@ -1,5 +1,6 @@
-"""Monte Carlo statistics of a campaign's results table: outcome rates with Wilson intervals and
-the distributions of the graded outcomes, per configuration (and per grid point).
+"""Monte Carlo statistics of a campaign's results table: outcome rates with Wilson intervals, the
+distributions of the graded outcomes, per configuration (and per grid point), and each
+configuration against the reference (GT) on the same variants and starts.
 
 Rates count completed runs only; failed runs are counted apart and never taken as "no collision".
 """
@@ -12,6 +13,8 @@ import numpy as np
 import pandas as pd
 from scipy.stats import binomtest
 
+from mufusion.configurations import Configuration
+
 # Boolean outcomes reported as rates: (column, label). ``off_road`` is used where the metrics
 # have it.
 OUTCOMES: tuple[tuple[str, str], ...] = (
@@ -20,6 +23,17 @@ OUTCOMES: tuple[tuple[str, str], ...] = (
     ("entered_opposing_lane", "opposing lane"),
     ("off_road", "off road"),
 )
+# The outcomes compared against the reference run by run, each with the graded metric that says
+# how far the failing run went and the one that says how close the other came:
+# (column, label, magnitude column, reference margin column).
+PAIRED_OUTCOMES: tuple[tuple[str, str, str, str], ...] = (
+    ("left_lane", "lane exit", "max_lane_excursion_m", "min_lane_margin_m"),
+    ("collision", "collision", "impact_speed_mps", "min_clearance_m"),
+)
+REFERENCE = Configuration.GT.value
+"""The configuration the others are judged against: perfect knowledge of the friction."""
+# A run's pair is the reference run of the same scenario, variant and seed.
+PAIR_KEYS = ("scenario", "variant", "seed")
 # Metrics in milliseconds are wall-clock timings of this machine, not outcomes of the run.
 WALL_CLOCK_SUFFIX = "_ms"
 CONFIDENCE = 0.95
@@ -150,3 +164,96 @@ def graded_summary(
                           "min": x.min(), "p5": p5, "median": p50, "p95": p95, "max": x.max()}
             rows.append({**values, "metric": column, **stats})
     return pd.DataFrame(rows)
+
+
+def _pairs(table: pd.DataFrame, reference: str) -> pd.DataFrame:
+    """Every completed non-reference run joined with its completed reference run (columns of the
+    reference suffixed ``_ref``); empty without both."""
+    ok = completed(table)
+    keys = [k for k in PAIR_KEYS if k in ok.columns]
+    ref = ok[ok["config"] == reference]
+    others = ok[ok["config"] != reference]
+    if ref.empty or others.empty or len(keys) < len(PAIR_KEYS):
+        return pd.DataFrame()
+    return others.merge(ref.drop(columns=["config"]), on=keys, suffixes=("", "_ref"))
+
+
+def paired_against_reference(
+    table: pd.DataFrame, reference: str = REFERENCE, by: Sequence[str] = ("scenario", "config")
+) -> pd.DataFrame:
+    """Each configuration's outcomes against the reference's, run by run.
+
+    A run is paired with the reference run of the same scenario, variant and seed (the same
+    start); runs without a completed pair are left out. For each outcome of
+    :data:`PAIRED_OUTCOMES` the table counts the pairs where only the configuration fails
+    (``worse``), only the reference fails (``better``) and both fail (``both``), and gives the
+    two-sided sign test on ``worse`` against ``better`` (``p_value``, NaN when neither occurs):
+    whether one fails more often than the other beyond chance, on the same starts.
+
+    Parameters
+    ----------
+    table
+        The campaign's results table.
+    reference
+        The reference configuration (default GT).
+    by
+        Columns that define a group (default: scenario and configuration; add ``feasibility``
+        for the oracle's classes).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per group and outcome: the ``by`` columns, ``outcome``, ``pairs``, ``worse``,
+        ``better``, ``both``, ``p_value``. Empty when the table has no pairs.
+    """
+    pairs = _pairs(table, reference)
+    by = list(by)
+    rows: list[dict[str, object]] = []
+    if pairs.empty:
+        return pd.DataFrame(rows)
+    for key, group in pairs.groupby(by, sort=False, dropna=False):
+        values = dict(zip(by, key if isinstance(key, tuple) else (key,), strict=True))
+        for column, label, _, _ in PAIRED_OUTCOMES:
+            if column not in group.columns:
+                continue
+            both_known = group[[column, f"{column}_ref"]].dropna()
+            mine = both_known[column].astype(bool).to_numpy()
+            ref = both_known[f"{column}_ref"].astype(bool).to_numpy()
+            worse, better = int((mine & ~ref).sum()), int((~mine & ref).sum())
+            p = binomtest(worse, worse + better).pvalue if worse + better else np.nan
+            rows.append({**values, "outcome": label, "pairs": len(both_known), "worse": worse,
+                         "better": better, "both": int((mine & ref).sum()), "p_value": float(p)})
+    return pd.DataFrame(rows)
+
+
+def worse_than_reference(table: pd.DataFrame, reference: str = REFERENCE) -> pd.DataFrame:
+    """The runs that fail an outcome their reference run does not, largest failure first.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per such run and outcome: ``scenario``, ``variant``, ``seed``, ``config``,
+        ``feasibility`` (when the table has it), ``outcome``, ``magnitude`` (how far the run went:
+        the lane excursion [m], the impact speed [m/s]) and ``reference_margin`` (how close the
+        reference came: its smallest lane margin [m], its smallest clearance [m]).
+    """
+    pairs = _pairs(table, reference)
+    rows: list[dict[str, object]] = []
+    if pairs.empty:
+        return pd.DataFrame(rows)
+    keep = [k for k in (*PAIR_KEYS, "config", "feasibility") if k in pairs.columns]
+    for column, label, magnitude, margin in PAIRED_OUTCOMES:
+        if column not in pairs.columns:
+            continue
+        known = pairs[[column, f"{column}_ref"]].notna().all(axis=1)
+        sub = pairs[known]
+        hit = sub[sub[column].astype(bool) & ~sub[f"{column}_ref"].astype(bool)]
+        for _, r in hit.iterrows():
+            rows.append({**{k: r[k] for k in keep}, "outcome": label,
+                         "magnitude": float(r.get(magnitude, np.nan)),
+                         "reference_margin": float(r.get(f"{margin}_ref", np.nan))})
+    out = pd.DataFrame(rows)
+    if out.empty:
+        return out
+    return out.sort_values(["outcome", "magnitude"], ascending=[True, False], kind="stable",
+                           ignore_index=True)
