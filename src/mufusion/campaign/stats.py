@@ -8,6 +8,7 @@ Rates count completed runs only; failed runs are counted apart and never taken a
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -226,6 +227,11 @@ def paired_against_reference(
     return pd.DataFrame(rows)
 
 
+def _number(value: Any) -> float:
+    """A metric's value as a float, NaN where it is undefined (None, NaN, absent)."""
+    return float("nan") if value is None or pd.isna(value) else float(value)
+
+
 def worse_than_reference(table: pd.DataFrame, reference: str = REFERENCE) -> pd.DataFrame:
     """The runs that fail an outcome their reference run does not, largest failure first.
 
@@ -250,8 +256,8 @@ def worse_than_reference(table: pd.DataFrame, reference: str = REFERENCE) -> pd.
         hit = sub[sub[column].astype(bool) & ~sub[f"{column}_ref"].astype(bool)]
         for _, r in hit.iterrows():
             rows.append({**{k: r[k] for k in keep}, "outcome": label,
-                         "magnitude": float(r.get(magnitude, np.nan)),
-                         "reference_margin": float(r.get(f"{margin}_ref", np.nan))})
+                         "magnitude": _number(r.get(magnitude)),
+                         "reference_margin": _number(r.get(f"{margin}_ref"))})
     out = pd.DataFrame(rows)
     if out.empty:
         return out
