@@ -30,6 +30,7 @@ from mufusion.campaign.stats import (
     worse_than_reference,
 )
 from mufusion.campaign.storage import atomic_write_text
+from mufusion.scenarios.feasibility import FeasibilityClass
 
 
 @dataclass(frozen=True)
@@ -171,8 +172,8 @@ def rates_by_class_markdown(table: pd.DataFrame) -> list[str]:
     return lines
 
 
-CLASS_ORDER = ("feasible", "marginal", "infeasible")
-"""The oracle's classes in the order tables list them."""
+CLASS_ORDER = tuple(c.value for c in sorted(FeasibilityClass, key=lambda c: -c.rank))
+"""The oracle's classes in the order tables list them: feasible, marginal, infeasible."""
 MAX_LISTED_RUNS = 30
 """At most this many runs are listed one by one under "Against GT" (the largest failures)."""
 
