@@ -211,6 +211,44 @@ def test_regain_never_exceeds_the_profile_and_starts_at_the_vehicle(start, cap, 
     assert np.all(np.diff(v**2) <= 2.0 * cap * np.diff(s) + 1e-9)
 
 
+@settings(max_examples=100, deadline=None)
+@given(start=st.floats(0.0, 30.0), data=st.data(), n=st.integers(2, 60))
+def test_no_speed_is_regained_before_the_lowest_point_below_the_vehicle(start, data, n) -> None:
+    s = np.arange(float(n))
+    kappa = np.array(data.draw(st.lists(st.sampled_from([0.0, 1 / 25, -1 / 60]),
+                                        min_size=n, max_size=n)))
+    mu = np.array(data.draw(st.lists(st.floats(0.05, 1.2), min_size=n, max_size=n)))
+    with np.errstate(divide="ignore"):
+        profile = max_speed_profile_mps(s, kappa, mu, 0.9, 25.0)
+    v = regain_limited_profile_mps(s, kappa, mu, 0.9, profile, start, 1.5)
+    if profile.min() < v[0]:
+        bottom = int(np.argmin(profile))
+        # On the way there the reference never rises: the running minimum of the profile.
+        held = np.minimum.accumulate(np.minimum(profile, v[0]))
+        np.testing.assert_array_equal(v[: bottom + 1], held[: bottom + 1])
+    else:
+        # Nothing ahead is slower than the vehicle: the pass regains speed as it always did.
+        assert v[-1] >= v[0] - 1e-12
+
+
+def test_a_vehicle_below_the_ramp_to_a_curve_holds_its_speed() -> None:
+    # 16 m/s, 40 m before an arc whose limit on μ̂ 0.9 is 14.2 m/s, cruise speed 18 m/s: the
+    # braking ramp towards the arc is above the vehicle for its first metres. Before it the
+    # reference asked the vehicle to regain speed at the drive's cap there, to brake it away
+    # again before the arc.
+    curve = lambda s: np.where(np.asarray(s, dtype=float) >= 40.0, 1 / 28, 0.0)  # noqa: E731
+    stages = np.linspace(0.0, 60.0, 41)
+    ref = curve_speed_reference_mps(stages, curve, _mu(0.9), 18.0, 0.9, 4.0, 0.8,
+                                    regain=(16.0, 1.5))
+    unlimited = curve_speed_reference_mps(stages, curve, _mu(0.9), 18.0, 0.9, 4.0, 0.8)
+    assert unlimited[0] > 16.5  # the ramp lies above the vehicle here
+    assert ref[0] == pytest.approx(16.0)
+    assert np.all(ref[stages < 40.0] <= 16.0 + 1e-9)
+    # The ramp itself is kept where it is below the vehicle: braking for the arc is unchanged.
+    below = unlimited < 16.0
+    np.testing.assert_allclose(ref[below & (stages < 40.0)], unlimited[below & (stages < 40.0)])
+
+
 def test_regain_rejects_bad_input() -> None:
     s = np.arange(3.0)
     with pytest.raises(ValueError, match="start_speed_mps"):

@@ -12,7 +12,8 @@ leaves the lane's play as a margin. The braking ramps may use only a share of th
 (``braking_fraction``; the planner's default 0.8), so braking a plan loses before a curve can be
 made up instead of arriving as excess speed. A forward pass from the vehicle's own speed
 (:func:`regain_limited_profile_mps`) lets the reference rise only as fast as the drive's cap on
-the g-g ellipse allows, so a vehicle below it inside a curve is not asked to regain speed at once.
+the g-g ellipse allows, so a vehicle below it inside a curve is not asked to regain speed at once,
+and not at all on its way to a curve that it must slow down for.
 """
 
 from __future__ import annotations
@@ -123,7 +124,10 @@ def regain_limited_profile_mps(
     whose semi-axes are the drive's acceleration cap and the lateral friction (on a straight the
     whole cap, at the lateral limit nothing). A vehicle below the profile inside a curve is then
     asked to regain speed only as fast as its cornering leaves friction for it, instead of at
-    once.
+    once. Where the profile somewhere ahead lies below the start speed, no speed is added before
+    its (first) lowest point: a vehicle that is below the braking ramp towards a curve, e.g.
+    after a friction probe or a rise of μ̂, holds its speed until the ramp meets it instead of
+    speeding up to brake harder later.
 
     Parameters
     ----------
@@ -148,6 +152,11 @@ def regain_limited_profile_mps(
     ...                                10.0, 1.5)
     >>> [round(float(x), 4) for x in v]  # √(100 + 2·1.5·1), √(103 + 3)
     [10.0, 10.1489, 10.2956]
+    >>> ramp = np.array([20.0, 12.0, 8.0, 20.0])  # a curve at 8 m/s two metres ahead
+    >>> v = regain_limited_profile_mps(np.arange(4.0), np.zeros(4), np.full(4, 0.8), 0.9, ramp,
+    ...                                10.0, 1.5)
+    >>> [round(float(x), 4) for x in v]  # held, the ramp, its bottom, then √(64 + 3)
+    [10.0, 10.0, 8.0, 8.1854]
     """
     if not start_speed_mps >= 0.0 or not max_accel_mps2 > 0.0:
         raise ValueError("start_speed_mps must be >= 0 and max_accel_mps2 > 0, got "
@@ -157,12 +166,19 @@ def regain_limited_profile_mps(
     s_list = np.asarray(s_m, dtype=float).tolist()
     cap = (np.asarray(profile_mps, dtype=float) ** 2).tolist()
     w = min(start_speed_mps * start_speed_mps, cap[0])
+    # Where the profile ahead falls below the vehicle's speed, the way to its lowest point is a
+    # deceleration: speed regained on it would only have to be braked away again, later and
+    # closer to the curve (docs/experiments.md, "No speed regained on the way to a curve").
+    bottom = cap.index(min(cap)) if min(cap) < w else 0
     out = [w]
     for i in range(len(cap) - 1):
-        lateral = w * max(kappa[i], kappa[i + 1])
-        ratio = min(lateral / accel[i], 1.0)
-        w = min(cap[i + 1], w + 2.0 * max_accel_mps2 * math.sqrt(1.0 - ratio * ratio)
-                * (s_list[i + 1] - s_list[i]))
+        if i < bottom:
+            w = min(cap[i + 1], w)
+        else:
+            lateral = w * max(kappa[i], kappa[i + 1])
+            ratio = min(lateral / accel[i], 1.0)
+            w = min(cap[i + 1], w + 2.0 * max_accel_mps2 * math.sqrt(1.0 - ratio * ratio)
+                    * (s_list[i + 1] - s_list[i]))
         out.append(w)
     return np.sqrt(np.array(out))
 
