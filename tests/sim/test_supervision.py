@@ -225,6 +225,43 @@ def test_probing_is_logged_bounded_and_makes_the_local_estimate_available(cautio
     assert first_available_s(steps) + 0.3 <= first_available_s(quiet)
 
 
+def test_the_probe_can_excite_the_estimator_on_every_surface_the_camera_declares() -> None:
+    # Braking with a share of the weight on each axle, a deceleration a loads the tires to
+    # a / (μ g): the ceiling must pass the threshold on the highest friction any class admits.
+    from mufusion.estimators.classes import PAPER_CLASSES
+    from mufusion.estimators.local import UTILIZATION_THRESHOLD
+    from mufusion.vehicle.params import GRAVITY_MPS2
+
+    top = max(c.value + c.margin for c in PAPER_CLASSES)
+    assert top == pytest.approx(1.0)
+    assert ProbingSettings().max_decel_mps2 > UTILIZATION_THRESHOLD * top * GRAVITY_MPS2
+    # ... and reaches it within the probe's time, the estimate seen one planning step later.
+    cfg = ProbingSettings()
+    prober = _prober()
+    prober.start(0.0, 18.0)
+    reach_s = UTILIZATION_THRESHOLD * top * GRAVITY_MPS2 / cfg.max_decel_mps2 * cfg.ramp_s
+    assert prober.decel_mps2(reach_s) == pytest.approx(UTILIZATION_THRESHOLD * top * GRAVITY_MPS2)
+    assert reach_s + 0.1 <= cfg.max_duration_s
+
+
+@pytest.mark.slow
+def test_a_probe_on_a_dry_road_measures_the_friction() -> None:
+    # The truck 40 m before a curve on μ 0.9 at 18 m/s: F-safe's μ̂ (the dry class minimum)
+    # cannot take the curve at this speed, so it probes. With a 3 m/s² ceiling the probe ended
+    # at its time limit in all 64 such runs of examples/limits_perturbed.toml, unmeasured.
+    log = run_scenario(load_scenario("turn", [
+        "vehicle=truck", "initial_speed_mps=18", "friction.mu_turn=0.9",
+        "turn.start_ahead_m=40", "turn.clothoid_m=0", "duration_s=1.0"]), "F-safe")
+    ev = log.events
+    start, end = ev[ev["kind"] == "probe_start"], ev[ev["kind"] == "probe_end"]
+    assert len(start) == 1 and len(end) == 1
+    assert end["detail"].iloc[0].startswith("local estimate available")
+    lost = float(end["detail"].iloc[0].split("; ")[1].split(" m/s")[0])
+    assert 0.0 < lost <= ProbingSettings().max_speed_loss_mps
+    steps = log.planning_steps
+    assert steps[steps["t_s"] <= float(end["t_s"].iloc[0])]["local_available"].astype(bool).any()
+
+
 @pytest.mark.slow
 def test_after_lane_recovery_the_planner_continues_the_adopted_plan(monkeypatch) -> None:
     # The pop-up's evasion plans leave the road band and trigger recovery at most steps of the
