@@ -15,6 +15,7 @@ from mufusion.sim.supervision import (
     Prober,
     ProbingSettings,
     planned_footprint_violation_m,
+    planned_obstacle_clearance_m,
     plausible_estimate,
     relaxed_estimate,
 )
@@ -288,6 +289,40 @@ def test_after_lane_recovery_the_planner_continues_the_adopted_plan(monkeypatch)
     assert details.str.contains("did not help").sum() >= 3
     assert details.str.contains("relaxed").sum() >= 1
     assert len(adopted) >= 10 and mismatches == []
+
+
+def test_planned_obstacle_clearance_by_hand() -> None:
+    from mufusion.planner import PlannerObstacle
+
+    x = np.zeros((3, 6))
+    x[:, State.s] = [0.0, 10.0, 20.0]
+    x[:, State.d] = [0.0, 1.0, 3.0]
+    ob = PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)
+    # Abreast of the obstacle the footprint's right edge is 3 − w/2 from the lane centre.
+    side_gap = 3.0 - 0.5 * TRUCK.width_m - 0.5
+    assert planned_obstacle_clearance_m(x, [ob], TRUCK) == pytest.approx(side_gap)
+    x[2, State.d] = 1.0  # now it runs into it: overlap across the obstacle's 1 m width
+    hit = planned_obstacle_clearance_m(x, [ob], TRUCK)
+    assert hit < 0.0
+    assert planned_obstacle_clearance_m(x, [], TRUCK) == np.inf
+
+
+@pytest.mark.slow
+def test_evading_lane_recovery_never_prefers_a_plan_that_hits_the_obstacle() -> None:
+    # 24 m/s, obstacle 35 m ahead 1.5 m left of the lane centre, μ 1.0 (the oracle: marginal).
+    # F-safe's friction-limited evasion (μ̂ 0.553 beyond the local estimate's reach) is predicted
+    # to hit the obstacle at every step of the first second, while its relaxed candidates pass
+    # it but leave the road band by more. Ranked by the road band alone, the colliding plan was
+    # kept at every step and the truck hit the obstacle at 16.2 m/s; GT passes it by 0.58 m.
+    log = run_scenario(load_scenario("popup", [
+        "initial_speed_mps=24", "obstacle.distance_m=35", "friction.mu=1.0",
+        "obstacle.lateral_offset_m=1.5", "duration_s=2.5"]), "F-safe")
+    m = compute_metrics(log)
+    assert not m.collision and m.min_clearance_m > 0.0
+    details = log.events[log.events["kind"] == "lane_recovery"]["detail"]
+    first_second = log.events[(log.events["kind"] == "lane_recovery") & (log.events["t_s"] < 1.0)]
+    assert first_second["detail"].str.contains("relaxed").sum() >= 5
+    assert len(details) >= 10
 
 
 def _popup(config: str, mu: float, speed_mps: float, distance_m: float, *extra: str):

@@ -40,6 +40,7 @@ from mufusion.sim.supervision import (
     Prober,
     ProbingSettings,
     planned_footprint_violation_m,
+    planned_obstacle_clearance_m,
     plausible_estimate,
     relaxed_estimate,
 )
@@ -333,20 +334,27 @@ class ClosedLoop:
         # keeps its latest plan as the next warm start (and that plan's front force as where
         # the next plan's force starts), which after the search would be the last candidate
         # tried, not the one the controller tracks.
-        best = (np.inf if plan.fallback else before, plan, planned_with, held, self.planner.memory)
+        # A plan predicted to hit an obstacle is never preferred to one predicted to pass it,
+        # however much further the latter leaves the lane (evading, the road band).
+        def rank(candidate: Plan, violation: float) -> tuple[bool, float]:
+            hits = planned_obstacle_clearance_m(candidate.states, obstacles, self.params) < 0.0
+            return (hits, np.inf if candidate.fallback else violation)
+
+        best = (rank(plan, before), before, plan, planned_with, held, self.planner.memory)
         for alpha in (a for a in alphas if a > held):
             relaxed = relaxed_estimate(estimate, alpha)
             assert relaxed is not None
             candidate = self._plan(xf, t, s_ego, relaxed, obstacles, mode)
             violation = self._footprint_violation_m(candidate)
-            if not candidate.fallback and violation < best[0]:
-                best = (violation, candidate, relaxed, alpha, self.planner.memory)
-            if not candidate.fallback and violation <= tolerance:
+            key = rank(candidate, violation)
+            if not candidate.fallback and key < best[0]:
+                best = (key, violation, candidate, relaxed, alpha, self.planner.memory)
+            if not candidate.fallback and violation <= tolerance and not key[0]:
                 break
-        violation, plan, adopted, alpha, memory = best
+        _, violation, plan, adopted, alpha, memory = best
         self.planner.restore(memory)
         self._recovery_alpha = alpha if hold else 0.0
-        problem = "no friction-limited plan" if not np.isfinite(best[0]) and alpha == 0.0 else (
+        problem = "no friction-limited plan" if plan.fallback and alpha == 0.0 else (
             "the friction-limited plan failed" if alpha > 0.0 and before <= tolerance
             else f"the plan left the lane by {before:.2f} m"
         )

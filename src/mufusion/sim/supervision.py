@@ -18,8 +18,10 @@ probe's cost; it also helps, as the vehicle arrives slower.
 vehicle within its lane (the plan's own predicted footprint, :func:`planned_footprint_violation_m`,
 leaves the band the planner keeps the body in by more than ``violation_tolerance_m``), the
 planner plans again with μ̂ relaxed towards the posterior mean, ``μ̂ + α (target − μ̂)`` for the
-smallest ``α`` of ``steps`` that keeps the lane (the least violating if none does; the candidates
-in increasing ``α``, each from the one before, and the next step continues the one adopted):
+smallest ``α`` of ``steps`` that keeps the lane (the least violating if none does, where a plan
+predicted to hit an obstacle, :func:`planned_obstacle_clearance_m`, ranks after every plan
+predicted to pass it; the candidates in increasing ``α``, each from the one before, and the next
+step continues the one adopted):
 the guarantee of the lower bound is given up only as far as needed to stay on the road, and
 only with a posterior (F, F-safe). The target is the posterior mean, but never above what the
 local estimate guarantees on the surface it measured (``μ_l − m_l``, carried over the camera's
@@ -62,12 +64,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from mufusion.configurations import MU_HAT_MAX, FrictionEstimate
 from mufusion.fusion import Z95, local_surface_bound
+from mufusion.planner import PlannerObstacle
+from mufusion.road.geometry import rectangle_corners, signed_clearance_m
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import State
 
@@ -186,6 +191,43 @@ def planned_footprint_violation_m(
     lo, hi = lane_bounds_m
     return float(max(0.0, np.max(lo - half_w - lowest, initial=0.0),
                      np.max(highest - hi - half_w, initial=0.0)))
+
+
+def planned_obstacle_clearance_m(
+    states: np.ndarray,
+    obstacles: Sequence[PlannerObstacle],
+    params: VehicleParams,
+) -> float:
+    """Smallest gap between a plan's predicted footprints and the obstacles [m], negative when
+    they overlap (minus the depth); ``inf`` without obstacles.
+
+    Footprints and obstacles are rectangles in road coordinates ``(s, d)``, the footprint
+    centred ``(l_f,body − l_r,body)/2`` ahead of the reference point along the heading error:
+    exact on a straight road, the planner's own frame on a curved one.
+
+    Examples
+    --------
+    >>> from mufusion.planner import PlannerObstacle
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> x = np.zeros((1, 6)); x[0, State.s] = 0.0
+    >>> ob = PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)
+    >>> gap = 20.0 - 0.5 - (0.5 * (TRUCK.cog_to_body_front_m - TRUCK.cog_to_body_rear_m)
+    ...                     + 0.5 * TRUCK.length_m)
+    >>> bool(np.isclose(planned_obstacle_clearance_m(x, [ob], TRUCK), gap))
+    True
+    """
+    if not obstacles:
+        return math.inf
+    x = np.asarray(states, dtype=float)
+    s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
+    ahead = 0.5 * (params.cog_to_body_front_m - params.cog_to_body_rear_m)
+    ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
+                            params.length_m, params.width_m)
+    return min(
+        float(np.min(signed_clearance_m(
+            ego, rectangle_corners(ob.s_m, ob.d_m, 0.0, ob.length_m, ob.width_m))))
+        for ob in obstacles
+    )
 
 
 def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
