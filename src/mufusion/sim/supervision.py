@@ -202,8 +202,8 @@ def planned_obstacle_clearance_m(
     they overlap (minus the depth); ``inf`` without obstacles.
 
     Footprints and obstacles are rectangles in road coordinates ``(s, d)``, the footprint
-    centred ``(l_f,body − l_r,body)/2`` ahead of the reference point along the heading error:
-    exact on a straight road, the planner's own frame on a curved one.
+    centred ``params.body_centre_ahead_of_cog_m`` ahead of the reference point along the heading
+    error: exact on a straight road, the planner's own frame on a curved one.
 
     Examples
     --------
@@ -211,8 +211,7 @@ def planned_obstacle_clearance_m(
     >>> from mufusion.vehicle.params import TRUCK
     >>> x = np.zeros((1, 6)); x[0, State.s] = 0.0
     >>> ob = PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)
-    >>> gap = 20.0 - 0.5 - (0.5 * (TRUCK.cog_to_body_front_m - TRUCK.cog_to_body_rear_m)
-    ...                     + 0.5 * TRUCK.length_m)
+    >>> gap = 20.0 - 0.5 - TRUCK.cog_to_body_front_m  # obstacle's near edge − footprint's front
     >>> bool(np.isclose(planned_obstacle_clearance_m(x, [ob], TRUCK), gap))
     True
     """
@@ -220,7 +219,7 @@ def planned_obstacle_clearance_m(
         return math.inf
     x = np.asarray(states, dtype=float)
     s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
-    ahead = 0.5 * (params.cog_to_body_front_m - params.cog_to_body_rear_m)
+    ahead = params.body_centre_ahead_of_cog_m
     ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
                             params.length_m, params.width_m)
     return min(
