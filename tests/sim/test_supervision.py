@@ -325,6 +325,31 @@ def test_evading_lane_recovery_never_prefers_a_plan_that_hits_the_obstacle() -> 
     assert len(details) >= 10
 
 
+@pytest.mark.slow
+def test_an_evasion_that_no_plausible_friction_makes_pass_turns_into_braking_in_lane() -> None:
+    # 19 m/s, obstacle 18 m ahead, 1.5 m left, μ 1.0 (infeasible: GT hits it at 13.4 m/s in its
+    # lane). F-safe's candidates all hit it, and so does the check at the posterior's upper
+    # edge; swerving anyway took it 0.99 m out of its lane into the obstacle at 15.4 m/s.
+    setting = ["initial_speed_mps=19", "obstacle.distance_m=18", "friction.mu=1.0",
+               "obstacle.lateral_offset_m=1.5", "duration_s=2.0"]
+    braking = run_scenario(load_scenario("popup", setting), "F-safe")
+    swerving = run_scenario(
+        load_scenario("popup", [*setting, "lane_recovery.brake_when_futile=false"]), "F-safe")
+    b, s = compute_metrics(braking), compute_metrics(swerving)
+    assert b.collision and s.collision  # no plan avoids it: physics
+    assert b.impact_speed_mps < s.impact_speed_mps - 1.0
+    assert b.max_lane_excursion_m == 0.0 < s.max_lane_excursion_m
+    futile = braking.events[braking.events["kind"] == "futile_evasion"]
+    assert len(futile) >= 1 and float(futile["t_s"].min()) == 0.0
+    assert futile["detail"].str.contains("braking in lane").all()
+    assert not swerving.events["kind"].eq("futile_evasion").any()
+
+
+def test_brake_when_futile_must_be_a_bool() -> None:
+    with pytest.raises(ValueError, match=r"lane_recovery\.brake_when_futile"):
+        LaneRecoverySettings(brake_when_futile="yes")  # type: ignore[arg-type]
+
+
 def _popup(config: str, mu: float, speed_mps: float, distance_m: float, *extra: str):
     return run_scenario(load_scenario("popup", [
         f"initial_speed_mps={speed_mps}", f"obstacle.distance_m={distance_m}", f"friction.mu={mu}",

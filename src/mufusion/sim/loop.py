@@ -353,6 +353,11 @@ class ClosedLoop:
                 break
         _, violation, plan, adopted, alpha, memory = best
         self.planner.restore(memory)
+        if mode == "evade" and best[0][0] and self.lane_recovery.brake_when_futile:
+            braking = self._brake_if_futile(t, xf, s_ego, estimate, obstacles)
+            if braking is not None:
+                self._recovery_alpha = 0.0
+                return braking, estimate
         self._recovery_alpha = alpha if hold else 0.0
         problem = "no friction-limited plan" if plan.fallback and alpha == 0.0 else (
             "the friction-limited plan failed" if alpha > 0.0 and before <= tolerance
@@ -366,6 +371,36 @@ class ClosedLoop:
             "relaxing μ̂ towards the posterior mean did not help",
         )
         return plan, adopted
+
+    def _brake_if_futile(
+        self,
+        t: float,
+        xf: np.ndarray,
+        s_ego: float,
+        estimate: FrictionEstimate,
+        obstacles: Sequence[PlannerObstacle],
+    ) -> Plan | None:
+        """The stop in lane, if an evasion with μ̂ at the posterior's upper 95 % edge also hits.
+
+        Called when every lane-recovery candidate is predicted to hit an obstacle; ``estimate``
+        is unrelaxed. Returns None (and the planner continues the adopted candidate) when that
+        evasion passes, or when either plan fails.
+        """
+        memory = self.planner.memory
+        top = plausible_estimate(estimate)
+        if top is not None:
+            check = self._plan(xf, t, s_ego, top, obstacles, "evade")
+            gap = planned_obstacle_clearance_m(check.states, obstacles, self.params)
+            if not check.fallback and gap < 0.0:
+                brake = self._plan(xf, t, s_ego, estimate, obstacles, "emergency")
+                if not brake.fallback:
+                    self._recorder.event(
+                        t, "futile_evasion",
+                        f"every evasion hits the obstacle, at the posterior's upper 95 % edge too "
+                        f"({gap:.2f} m); braking in lane")
+                    return brake
+        self.planner.restore(memory)
+        return None
 
     def _held_relaxation(self, estimate: FrictionEstimate) -> FrictionEstimate:
         """``estimate`` relaxed by the fraction lane recovery adopted at the previous step."""

@@ -58,6 +58,14 @@ the loop looks for a stop in lane, in this order:
 Both apply only before an evasion has started: a stop that fits only once the vehicle is turning
 away comes late, and switching mid-manoeuvre is worse than either (measured:
 docs/experiments.md, "F-safe's lane in the pop-up").
+
+**Braking when the evasion is futile** (``brake_when_futile``). Evading, lane recovery ranks a
+candidate predicted to hit an obstacle (:func:`planned_obstacle_clearance_m`) after every one
+predicted to pass it. When every candidate hits, one more plan is made with μ̂ at the upper edge
+of the posterior's 95 % band (:func:`plausible_estimate`), as a check only: if it hits too, no
+evasion the posterior allows passes the obstacle, and the vehicle brakes in lane with the
+unrelaxed μ̂ (the planner's emergency mode) to lower the impact speed, logged as
+``futile_evasion``. The check is made afresh at each planning step.
 """
 
 from __future__ import annotations
@@ -120,11 +128,17 @@ class LaneRecoverySettings:
     enabled: bool = True
     violation_tolerance_m: float = 0.05
     steps: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0)
+    # Evading, when every candidate and a plan at the posterior's upper 95 % edge hit the
+    # obstacle: brake in lane instead (see the module docstring).
+    brake_when_futile: bool = True
     # Long enough for the brakes' lag and the local estimator's buffer at 10 Hz planning, short
     # enough that an evasion from the probe's end stays within reach of one from its start.
     stop_probe_s: float = 0.3
 
     def __post_init__(self) -> None:
+        if not isinstance(self.brake_when_futile, bool):
+            raise ValueError("lane_recovery.brake_when_futile must be true or false, "
+                             f"got {self.brake_when_futile!r}")
         if not (math.isfinite(self.stop_probe_s) and 0.0 <= self.stop_probe_s <= 1.0):
             raise ValueError(
                 "lane_recovery.stop_probe_s must be finite and in [0, 1] s (0: no braking "
