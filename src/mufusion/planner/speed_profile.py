@@ -169,7 +169,8 @@ def regain_limited_profile_mps(
     # Where the profile ahead falls below the vehicle's speed, the way to its lowest point is a
     # deceleration: speed regained on it would only have to be braked away again, later and
     # closer to the curve (docs/experiments.md, "No speed regained on the way to a curve").
-    bottom = cap.index(min(cap)) if min(cap) < w else 0
+    lowest = min(cap)
+    bottom = cap.index(lowest) if lowest < w else 0
     out = [w]
     for i in range(len(cap) - 1):
         if i < bottom:

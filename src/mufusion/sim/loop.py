@@ -351,9 +351,9 @@ class ClosedLoop:
                 best = (key, violation, candidate, relaxed, alpha, self.planner.memory)
             if not candidate.fallback and violation <= tolerance and not key[0]:
                 break
-        _, violation, plan, adopted, alpha, memory = best
+        (every_one_hits, _), violation, plan, adopted, alpha, memory = best
         self.planner.restore(memory)
-        if mode == "evade" and best[0][0] and self.lane_recovery.brake_when_futile:
+        if mode == "evade" and every_one_hits and self.lane_recovery.brake_when_futile:
             braking = self._brake_if_futile(t, xf, s_ego, estimate, obstacles)
             if braking is not None:
                 self._recovery_alpha = 0.0
