@@ -194,6 +194,7 @@ def solution_margins() -> dict[str, float]:
         radius_front, radius_rear = plan_polygon_radii_n(us, stage, params, load_transfer)
         front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
         fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], params)
+        fyr[0] = 0.0  # as the check: stage 0's rear lateral force is the measured state's
         rear = normals @ np.stack([us[:, Input.fxr], fyr])
         lower, upper = longitudinal_force_bounds_n(params)
         fx = us[:, [Input.fxf, Input.fxr]]

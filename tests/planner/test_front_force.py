@@ -122,3 +122,27 @@ def test_plans_respect_the_steering_rate(backend):
     assert planned <= bound * (1.0 + 1e-6)
     # From plan to plan too: each starts from the force the previous one commands now.
     assert applied <= bound * (1.0 + 1e-6)
+
+
+def _mu(s):
+    return 0.9 + 0.0 * np.asarray(s)
+
+
+@pytest.mark.parametrize("measured", [4e3, None, float("nan")],
+                         ids=["measured", "none", "not-finite"])
+def test_the_plan_starts_from_the_measured_front_force(measured):
+    # After a plan that turns in (an S-bend ahead), the next one starts its force state from the
+    # force the tires deliver, when there is a measurement; otherwise (none, or not finite: a
+    # failed measurement degrades) from what the previous plan commands now.
+    config = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=0.45, use_sampling=False,
+                           steering_rate_limit=True)
+    planner = TractionAdaptivePlanner(TRUCK, config)
+    x = np.array([0.0, 0.0, 0.0, 0.0, 13.0, 0.0])
+    first = planner.step(x, 0.0, _s_curve, _mu, [], "cruise", 13.0)
+    commanded = float(first.inputs[1, Input.fyf])
+    assert abs(commanded - 4e3) > 1e3  # the two anchors differ
+    second = planner.step(first.states[1], 0.1, _s_curve, _mu, [], "cruise", 13.0,
+                          front_force_n=measured)
+    assert second.ok
+    expected = 4e3 if measured is not None and np.isfinite(measured) else commanded
+    assert second.inputs[0, Input.fyf] == pytest.approx(expected, abs=1.0)

@@ -10,6 +10,7 @@ from mufusion.planner.ocp import (
     Param,
     PlausibilityLimits,
     constraint_expressions,
+    longitudinal_force_bounds_n,
     plan_polygon_radii_n,
     polygon_directions,
     polygon_rows,
@@ -118,9 +119,11 @@ def test_the_rear_tires_keep_their_reserve_when_the_plans_count_their_load_trans
     # that braking 9.7 kN: planned at the guess's loads, the rear tires saturate and the body
     # swings towards the lane edge. Whether a corner then crosses it is decided by centimetres
     # (9 cm over with the polygon's faces as one-sided QP rows, 6.5 cm inside with the same
-    # polygon as two-sided slabs), so the test measures the mechanism: saturation, body slip and
-    # the room left. Measured on the speed reference this was found on (braking as late as the
-    # polygon allows, regaining speed at once).
+    # polygon as two-sided slabs), so the test measures the mechanism: saturation and body slip.
+    # Measured on the speed reference this was found on (braking as late as the polygon allows,
+    # regaining speed at once). The room left used to differ too (15.3 against 6.5 cm); since the
+    # plans start their front force from the realised one, the loop absorbs the saturation
+    # (10.8 against 11.2 cm) and only the tires show it.
     overrides = ["initial_speed_mps=18", "friction.mu_turn=0.9", "turn.start_ahead_m=40",
                  "turn.direction=right", "turn.clothoid_m=0", "vehicle=truck",
                  "planner.reference_braking_fraction=1", "planner.reference_regain_limit=false"]
@@ -131,8 +134,7 @@ def test_the_rear_tires_keep_their_reserve_when_the_plans_count_their_load_trans
     guess = run_scenario(load_scenario("turn", [*overrides, "planner.load_transfer=false"]), "GT")
     guess_loads = compute_metrics(guess)
     assert guess.timeseries["util_rear"].max() >= SATURATION > own.timeseries["util_rear"].max()
-    assert guess_loads.max_body_slip_rad > 1.2 * m.max_body_slip_rad
-    assert guess_loads.min_lane_margin_m < m.min_lane_margin_m - 0.05
+    assert guess_loads.max_body_slip_rad > m.max_body_slip_rad
 
 
 def test_a_braking_plan_logs_the_loads_and_limits_of_its_own_braking() -> None:
@@ -197,3 +199,34 @@ def test_an_odd_polygon_is_rejected() -> None:
 
     with pytest.raises(ValueError, match="polygon_sides must be an even number >= 12"):
         PlannerConfig(polygon_sides=13)
+
+
+def test_the_solution_check_leaves_stage_0s_rear_lateral_force_to_the_state() -> None:
+    # A vehicle whose rear slides: at stage 0 the linear rear tire gives 6 times the rear
+    # polygon's radius. No solution can change the measured state; judged there, every plan of a
+    # sliding vehicle would be rejected (docs/experiments.md, "A check that judges the solver").
+    guess_x = np.zeros((N + 1, N_STATES))
+    guess_x[:, State.vx] = 15.0
+    guess_x[:, State.s] = 1.5 * np.arange(N + 1)
+    stage = stage_parameters(guess_x, np.zeros((N, N_INPUTS)), lambda s: 0.0 * s,
+                             lambda s: 0.2 + 0.0 * s, TRUCK, LAMBDA)
+    radius, stiffness = stage["radius_rear"][0], stage["rear_stiffness"][0]
+    limits = PlausibilityLimits()
+    sliding_vy = -6.0 * radius * 15.0 / stiffness  # F_yr = C_r (l_r ψ̇ − v_y) / v_x
+
+    def check(slide_at: int, fxr0_n: float = 0.0) -> FallbackReason:
+        states = guess_x.copy()
+        states[slide_at, State.vy] = sliding_vy
+        inputs = np.zeros((N, N_INPUTS))
+        inputs[0, Input.fxr] = fxr0_n
+        return check_solution(states, inputs, stage, np.full(N, -1.0), np.full(N, 1.0), TRUCK,
+                              12, limits, load_transfer=True)
+
+    assert check(slide_at=0) is FallbackReason.NONE
+    # What the solver chose is still judged: the same force one stage later, and at stage 0 a
+    # rear brake force 4.5 times the radius (inside the actuator's bound).
+    assert check(slide_at=1) is FallbackReason.IMPLAUSIBLE
+    lower, _ = longitudinal_force_bounds_n(TRUCK)
+    assert -4.5 * radius > lower[1]
+    assert check(slide_at=0, fxr0_n=-4.5 * radius) is FallbackReason.IMPLAUSIBLE
+    assert check(slide_at=0, fxr0_n=-0.9 * radius) is FallbackReason.NONE

@@ -6,6 +6,7 @@ import pytest
 
 from mufusion.metrics import compute_metrics
 from mufusion.planner import FallbackReason
+from mufusion.planner.ocp import PlannerConfig, PlausibilityLimits, polygon_directions
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
 
@@ -64,8 +65,9 @@ def test_gt_brakes_for_the_arc_on_time_with_the_torque_compensation(direction: s
     # (body slip 0.23-0.25 rad). With the lag compensated it keeps the lane (0 cm both ways on
     # this code; 0 and 1.6 cm before the polygons followed the plan's own load transfer).
     # Measured on the speed reference the compensation was made on (braking as late as the
-    # polygon allows, regaining speed at once): with the default reference the truck keeps its
-    # lane here even with the lag uncompensated (last assertion).
+    # polygon allows, regaining speed at once): with the default reference the lag uncompensated
+    # costs little here (last assertion: it kept the lane until the plans started their front
+    # force from the realised one; since then 2.0 and 2.1 cm).
     variant = [
         "initial_speed_mps=18", "friction.mu_turn=0.9", "turn.start_ahead_m=40",
         f"turn.direction={direction}", "turn.clothoid_m=5", "vehicle=truck",
@@ -83,7 +85,7 @@ def test_gt_brakes_for_the_arc_on_time_with_the_torque_compensation(direction: s
     assert late.max_lane_excursion_m > 0.3 and late.max_body_slip_rad > m.max_body_slip_rad
     reserve = compute_metrics(run_scenario(
         load_scenario("turn", overrides=[*variant, "sim.torque_compensation=false"]), "GT"))
-    assert reserve.max_lane_excursion_m == 0.0
+    assert reserve.max_lane_excursion_m < 0.05  # the bound the compensated run meets above
 
 
 @pytest.mark.parametrize("direction", ["left", "right"])
@@ -94,12 +96,44 @@ def test_gt_leaves_the_arc_in_lane_when_the_reference_regains_speed_on_the_ellip
     # 14.66 m/s, so the reference never brakes). Slightly below the cruise speed in the arc, a
     # reference that jumps back to 14 m/s has the plans drive the rear axle at the whole cap
     # while cornering; the body slips and the curvature's step at the arc's end leaves a heading
-    # error: the rear corner crossed the lane edge by 8 cm in both directions.
+    # error: the rear corner crossed the lane edge by 8 cm in both directions. Since the plans
+    # start their front force from the realised one the loop keeps the lane even so (margin 12.5
+    # against 20.1 cm with the limit), so the test measures what the limit spares the tires:
+    # rear utilisation 0.86 against 0.79, body slip 0.066 against 0.051 rad.
     overrides = ["initial_speed_mps=14", "friction.mu_turn=0.9", "turn.start_ahead_m=5",
                  f"turn.direction={direction}", "turn.clothoid_m=0", "vehicle=truck"]
-    m = compute_metrics(run_scenario(load_scenario("turn", overrides=overrides), "GT"))
+    log = run_scenario(load_scenario("turn", overrides=overrides), "GT")
+    m = compute_metrics(log)
     assert m.feasibility == "feasible"
     assert m.max_lane_excursion_m == 0.0
-    at_once = compute_metrics(run_scenario(load_scenario(
-        "turn", overrides=[*overrides, "planner.reference_regain_limit=false"]), "GT"))
-    assert at_once.max_lane_excursion_m > 0.05
+    at_once_log = run_scenario(load_scenario(
+        "turn", overrides=[*overrides, "planner.reference_regain_limit=false"]), "GT")
+    at_once = compute_metrics(at_once_log)
+    assert (at_once_log.timeseries["util_rear"].max()
+            > log.timeseries["util_rear"].max() + 0.03)
+    assert at_once.max_body_slip_rad > m.max_body_slip_rad
+    assert at_once.min_lane_margin_m < m.min_lane_margin_m
+
+
+def test_a_vehicle_whose_rear_slides_keeps_its_plans() -> None:
+    # Car, 14 m/s onto μ 0.2, curve 40 m ahead, left, no clothoid (marginal), F-safe: in the arc
+    # the rear slides for a while, and the plans' first stage (the measured state) has the
+    # linear rear tire far outside the rear polygon. The solution check used to judge that
+    # stage too and rejected every plan of the sliding car: five in a row, the minimal-risk
+    # stop, a spin and 1.05 m out of the lane (with the plans' front force started from the
+    # realised one, docs/experiments.md).
+    cfg = load_scenario("turn", overrides=[
+        "initial_speed_mps=14", "friction.mu_turn=0.2", "turn.start_ahead_m=40",
+        "turn.direction=left", "turn.clothoid_m=0", "vehicle=car",
+    ])
+    log = run_scenario(cfg, "F-safe")
+    plans = log.plans
+    first = plans[plans["k"] == 0]
+    _, ratio = polygon_directions(PlannerConfig().polygon_sides)  # the scenarios' polygons
+    outside = (first["fyr_n"].abs()
+               > (ratio + PlausibilityLimits().rear_polygon_tolerance) * first["limit_rear_n"])
+    assert outside.sum() >= 5  # the state slid, step after step
+    m = compute_metrics(log)
+    assert m.feasibility == "marginal"
+    assert m.fallbacks == 0 and not m.minimal_risk and not m.spun
+    assert m.min_lane_margin_m > 0.2

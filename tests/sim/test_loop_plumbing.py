@@ -128,6 +128,29 @@ def test_utilization_reaches_the_estimator() -> None:
     assert max(friction.utilizations) > 0.2
 
 
+def test_each_plan_is_given_the_front_force_the_tires_deliver() -> None:
+    # The plans' front-force state starts from the realised force (docs/experiments.md, "A check
+    # that judges the solver"): the planner gets the front axle's body-frame force of the plant
+    # step that ends at its tick, none before the clock starts or at t = 0.
+    loop, planner, _, _ = _loop(steer_rad=0.05)
+    outputs = []
+    plant_step = loop.plant.step
+
+    def recording_step(*args):
+        out = plant_step(*args)
+        outputs.append(out)
+        return out
+
+    loop.plant.step = recording_step
+    loop.run(1.0, warmup_steps=3)
+    given = [c["front_force_n"] for c in planner.calls]
+    assert given[:4] == [None] * 4  # three warm-up plans and the one at t = 0
+    per_plan = RATES.plant_hz / RATES.planner_hz
+    expected = [outputs[round(k * per_plan) - 1].front_lateral_force_n for k in range(1, 11)]
+    assert given[4:] == expected
+    assert min(abs(f) for f in expected[2:]) > 1e3  # the truck is steered: a real force
+
+
 def test_collision_stops_the_run_and_is_measured() -> None:
     obstacle = Obstacle(s_m=45.0, d_m=0.0, length_m=1.0, width_m=1.0)
     loop, *_ = _loop(obstacles=(obstacle,))

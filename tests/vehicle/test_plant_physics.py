@@ -243,3 +243,17 @@ def test_bad_arguments_are_rejected_with_their_names() -> None:
         initial_state(TRUCK, 0.0, 0.0, 0.0, -1.0)
     with pytest.raises(ValueError, match="command"):
         plant_derivative(initial_state(TRUCK, 0.0, 0.0, 0.0, 1.0), np.zeros(2), 0.5, 0.5, TRUCK)
+
+
+def test_the_front_lateral_force_is_the_body_frame_share_of_the_lateral_balance() -> None:
+    # Steered and braking: the wheel frame's F_x has a lateral share sin δ in the body frame, so
+    # the body-frame force differs from the wheel frame's F_y, and with the rear's F_y it is
+    # what accelerates the body sideways (the planner's F_yf, docs/experiments.md).
+    plant = Plant(CAR, initial_state(CAR, 0.0, 0.0, 0.0, 15.0))
+    for _ in range(60):
+        out = plant.step(ActuatorCommand(0.08, -900.0, -300.0), 0.9, 0.9)
+    steer = out.x[PlantState.STEER]
+    assert steer > 0.05 and out.front.fx_n < -500.0
+    assert out.front_lateral_force_n == pytest.approx(
+        CAR.mass_kg * out.accel_y_mps2 - out.rear.fy_n, rel=1e-9)
+    assert abs(out.front_lateral_force_n - out.front.fy_n) > 0.04 * abs(out.front.fx_n)

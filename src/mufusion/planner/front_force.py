@@ -52,12 +52,12 @@ def augmented_problem(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The augmented initial state ``(7,)``, state guess ``(N+1, 7)`` and input guess ``(N, 3)``.
 
-    The force state starts at the guess's first front force (the shifted previous plan's force
-    for now: the force cannot jump within the step either), clipped into the first stage's
-    inscribed front radius. That row is hard and a force state fixed outside it, e.g. after μ̂
-    dropped, would leave the QP without a solution; inside it, ``F_xf = 0`` satisfies it. Stage
-    k's force is the guess's (the last one held for the terminal stage) and the rate input is the
-    difference quotient, so a guess that respects the bound stays consistent.
+    The force state starts at the guess's first front force (the caller puts there the force the
+    tires deliver, or the previous plan's command now: the force cannot jump), clipped into the
+    first stage's inscribed front radius. That row is hard and a force state fixed outside it,
+    e.g. after μ̂ dropped, would leave the QP without a solution; inside it, ``F_xf = 0``
+    satisfies it. Stage k's force is the guess's (the last one held for the terminal stage) and
+    the rate input is the difference quotient, so a guess that respects the bound stays consistent.
     """
     n = guess_u.shape[0]
     _, ratio = polygon_directions(n_sides)

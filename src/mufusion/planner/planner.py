@@ -12,6 +12,7 @@ counted and logged, re-initialises the solver, and never raises. After
 from __future__ import annotations
 
 import logging
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -227,6 +228,7 @@ class TractionAdaptivePlanner:
         reference_d_m: float = 0.0,
         lane_d_min_m: float | None = None,
         lane_d_max_m: float | None = None,
+        front_force_n: float | None = None,
     ) -> Plan:
         """Plan from ``x0`` (Frenet state, shape (6,)) at time ``t_s`` [s].
 
@@ -254,6 +256,11 @@ class TractionAdaptivePlanner:
         lane_d_min_m, lane_d_max_m
             Bounds on the reference point's lateral offset [m] (lane or road edges already shrunk
             by half the vehicle width); default from the config.
+        front_force_n
+            The front axle's lateral force [N] the vehicle delivers now (body frame, as a force
+            observer supplies it). With ``steering_rate_limit`` the plan's front-force state starts
+            from it; ``None`` (or not finite: a measurement that failed degrades, never raises):
+            from the force the previous plan commands now (planner/front_force.py).
 
         Returns
         -------
@@ -303,10 +310,15 @@ class TractionAdaptivePlanner:
                     reference_d_m, lo_lane, hi_lane,
                 )
         if cfg.steering_rate_limit:
-            # The front force cannot jump: the plan starts from the force the previous plan
-            # commands now, whatever guess (sampled roll-out, minimal-risk roll-out) it starts
-            # from (planner/front_force.py).
-            applied = self._previous_front_force_n(x0, t_s)
+            # The front force cannot jump: the plan starts from the force the tires deliver now,
+            # whatever guess (sampled roll-out, minimal-risk roll-out) it starts from
+            # (planner/front_force.py). Without a measurement, from what the previous plan
+            # commands now; that one is not what the tires deliver when the steering lags a plan
+            # that turned in hard, and the plans would carry the difference (docs/experiments.md,
+            # "What carries the first plan").
+            applied = (float(front_force_n) if front_force_n is not None
+                       and math.isfinite(front_force_n)
+                       else self._previous_front_force_n(x0, t_s))
             if applied is not None:
                 guess_u = guess_u.copy()
                 guess_u[0, Input.fyf] = applied

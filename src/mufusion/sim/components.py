@@ -113,6 +113,7 @@ class Planner(Protocol):
         reference_d_m: float = 0.0,
         lane_d_min_m: float | None = None,
         lane_d_max_m: float | None = None,
+        front_force_n: float | None = None,
     ) -> Plan: ...
 
     @property

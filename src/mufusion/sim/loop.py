@@ -160,6 +160,9 @@ class ClosedLoop:
         self._stop_probe_spent = False  # one braking probe per run: its measurement stands
         self._stop_alpha: float | None = None  # the relaxation of the stop in lane, while held
         self._recovery_alpha = 0.0  # lane recovery's relaxation adopted at the last step
+        # The front axle's body-frame lateral force of the last plant step: each plan's force
+        # state starts from it (None before the first step: the warm-up plans start from theirs).
+        self._front_force_n: float | None = None
         for fault in self.faults:
             self._recorder.event(fault.start_s, "fault_scheduled", _describe(fault))
         try:
@@ -196,6 +199,7 @@ class ClosedLoop:
                 s_ego = float(xf[State.s])
 
             if i % rates.planner_every == 0:
+                self._front_force_n = None if last is None else last.front_lateral_force_n
                 plan_step += 1
                 estimate, plan = self._planning_step(plan_step, t, xf, util_window, plan)
                 util_window = 0.0
@@ -613,6 +617,7 @@ class ClosedLoop:
             reference_d_m=0.0,
             lane_d_min_m=self.lane_bounds_m[0],
             lane_d_max_m=self.lane_bounds_m[1],
+            front_force_n=self._front_force_n,
         )
 
 

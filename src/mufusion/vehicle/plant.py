@@ -93,6 +93,15 @@ class PlantOutput:
         return math.hypot(self.x[PlantState.VX], self.x[PlantState.VY])
 
     @property
+    def front_lateral_force_n(self) -> float:
+        """Lateral force of the front axle in the body frame [N]: ``F_x sin δ + F_y cos δ``.
+
+        The planner's ``F_yf`` (its body-frame front force), as a force observer would supply it.
+        """
+        steer = float(self.x[PlantState.STEER])
+        return self.front.fx_n * math.sin(steer) + self.front.fy_n * math.cos(steer)
+
+    @property
     def utilization_front(self) -> float:
         """Realised utilisation of the front axle, ``front.utilization``."""
         return self.front.utilization
