@@ -34,6 +34,7 @@ from mufusion.planner.ocp import (
     stage_parameters,
 )
 from mufusion.planner.planner import TractionAdaptivePlanner, rollout
+from mufusion.planner.safeguards import judged_rear_rows_n
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.planner_model import (
     Input,
@@ -41,7 +42,6 @@ from mufusion.vehicle.planner_model import (
     frenet_bicycle_dynamics,
     normal_loads_n,
     rear_cornering_stiffness_n_per_rad,
-    rear_lateral_force_n,
 )
 
 STEPS = 220
@@ -193,9 +193,7 @@ def solution_margins() -> dict[str, float]:
         # The radii the plan was solved with (its own loads with load transfer).
         radius_front, radius_rear = plan_polygon_radii_n(us, stage, params, load_transfer)
         front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
-        fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], params)
-        fyr[0] = 0.0  # as the check: stage 0's rear lateral force is the measured state's
-        rear = normals @ np.stack([us[:, Input.fxr], fyr])
+        rear = judged_rear_rows_n(xs, us, stage, params, normals)
         lower, upper = longitudinal_force_bounds_n(params)
         fx = us[:, [Input.fxf, Input.fxr]]
         bound = np.maximum(lower - fx, fx - upper) / np.maximum(np.abs(lower), np.abs(upper))

@@ -134,6 +134,24 @@ class SanitizedFriction:
         return mu
 
 
+def judged_rear_rows_n(
+    states: np.ndarray, inputs: np.ndarray, stage: dict[str, np.ndarray],
+    params: VehicleParams, normals: np.ndarray,
+) -> np.ndarray:
+    """The rear polygon's rows ``(n_sides, N)`` [N] of a solution as :func:`check_solution` judges
+    them: ``normals @ (F_xr, F_yr)`` with the linear rear tire's ``F_yr`` at the plan's states,
+    except at stage 0, where only the solver's ``F_xr`` counts.
+
+    Stage 0's rear lateral force is the measured state's: no solution can change it, and a
+    vehicle whose rear slides puts it far outside the polygon (the linear tire). Judged there,
+    every plan of a sliding vehicle is rejected, exactly when it needs one (docs/experiments.md,
+    "A check that judges the solver").
+    """
+    fyr = rear_lateral_force_n(np.asarray(states)[:-1].T, stage["rear_stiffness"], params)
+    fyr[0] = 0.0
+    return normals @ np.stack([np.asarray(inputs)[:, Input.fxr], fyr])
+
+
 def check_solution(
     states: np.ndarray,
     inputs: np.ndarray,
@@ -177,13 +195,7 @@ def check_solution(
     normals, ratio = polygon_directions(n_sides)
     radius_front, radius_rear = plan_polygon_radii_n(us, stage, params, load_transfer)
     front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
-    fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], params)
-    # Stage 0's rear lateral force is the measured state's: no solution can change it, and a
-    # vehicle whose rear slides puts it far outside the polygon (the linear tire). Judged there,
-    # every plan of a sliding vehicle is rejected, exactly when it needs one (docs/experiments.md,
-    # "A check that judges the solver"); stage 0 checks the solver's longitudinal force only.
-    fyr[0] = 0.0
-    rear = normals @ np.stack([us[:, Input.fxr], fyr])
+    rear = judged_rear_rows_n(xs, us, stage, params, normals)
     lower, upper = longitudinal_force_bounds_n(params)
     slack = limits.force_bound_tolerance * np.maximum(np.abs(lower), np.abs(upper))
     fx = us[:, [Input.fxf, Input.fxr]]
