@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
 from mufusion.cli import app
+from tests.processes import child_environment
 
 
 def _run(*args: str):
@@ -61,3 +65,58 @@ def test_a_binary_scenario_file_is_named(tmp_path: Path) -> None:
     result = _run("run", str(path), "--out", str(tmp_path / "out"))
     assert result.exit_code == 2
     assert "garbage.toml" in _said(result)
+
+
+# What a command refused for bad input must not have imported: the solver stack, the plotting,
+# the tables and SciPy (each costs a large part of a second; together they took 3 s).
+HEAVY = ("acados_template", "casadi", "matplotlib", "pandas", "scipy", "mufusion.sim.loop")
+
+_IMPORTED_AT_EXIT = """
+import atexit, json, runpy, sys
+out = sys.argv.pop(1)
+def record():
+    with open(out, "w") as f:
+        json.dump(sorted(sys.modules), f)
+atexit.register(record)
+sys.argv[0] = "mufusion"
+runpy.run_module("mufusion", run_name="__main__", alter_sys=True)
+"""
+
+
+def _modules_after(tmp_path: Path, *args: str) -> tuple[subprocess.CompletedProcess, set[str]]:
+    """Run ``python -m mufusion ARGS`` in a fresh interpreter; its result and what it imported."""
+    record = tmp_path / "modules.json"
+    result = subprocess.run(
+        [sys.executable, "-c", _IMPORTED_AT_EXIT, str(record), *args],
+        capture_output=True, text=True, env=child_environment(), timeout=120,
+    )
+    return result, set(json.loads(record.read_text()))
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (["run", "turn", "--set", "friction.mu_turn=7"], "friction.mu_turn"),
+        (["run", "popup", "-c", "F_safe"], "--config must be one of"),
+        (["reproduce", "--jobs", "0"], "--jobs must be >= 1"),
+    ],
+)
+def test_bad_input_is_refused_before_the_heavy_stack_loads(tmp_path, args, fragment) -> None:
+    result, modules = _modules_after(tmp_path, *args, "--out", str(tmp_path / "out"))
+    assert result.returncode == 2, result.stderr
+    assert fragment in " ".join(result.stderr.split())
+    loaded = [m for m in HEAVY if m in modules]
+    assert not loaded, f"imported before refusing the input: {loaded}"
+    assert "mufusion.scenarios" in modules or args[0] == "reproduce"  # the check did run
+
+
+def test_a_bad_campaign_file_is_refused_before_the_heavy_stack_loads(tmp_path) -> None:
+    file = tmp_path / "c.toml"
+    file.write_text('name = "t"\nscenarios = ["popup"]\nconfigs = ["GT"]\n'
+                    '[grid]\n"friction.mu" = [0.8, 9.0]\n')
+    result, modules = _modules_after(tmp_path, "campaign", str(file), "--out",
+                                     str(tmp_path / "out"))
+    assert result.returncode == 2, result.stderr
+    assert "friction.mu" in " ".join(result.stderr.split())
+    loaded = [m for m in HEAVY if m in modules]
+    assert not loaded, f"imported before refusing the input: {loaded}"

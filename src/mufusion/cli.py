@@ -8,16 +8,17 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import shlex
 import time
 from pathlib import Path
-from typing import Annotated, Literal, NoReturn
+from typing import Annotated, NoReturn
 
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
+
+from mufusion import cli_input
 
 app = typer.Typer(
     name="mufusion",
@@ -48,17 +49,6 @@ def _fail(message: str) -> NoReturn:
     raise typer.Exit(code=2)
 
 
-def _check_out_dir(out: Path, option: str = "--out") -> None:
-    """Fail (exit 2) before any work if ``out`` cannot be a writable output directory."""
-    existing = next((p for p in (out, *out.parents) if p.exists()), None)
-    if out.exists() and not out.is_dir():
-        _fail(f"{option} {str(out)!r} is a file, not a directory")
-    if existing is not None and not existing.is_dir():
-        _fail(f"{option} {str(out)!r}: {str(existing)!r} is a file, not a directory")
-    if existing is not None and not os.access(existing, os.W_OK | os.X_OK):
-        _fail(f"{option} {str(out)!r} is not writable ({str(existing)!r} denies writing)")
-
-
 @app.command()
 def run(
     scenario: Annotated[
@@ -86,19 +76,14 @@ def run(
 
     The exit code is 0 when the run completes, also when the vehicle crashes: that is a result.
     """
-    from mufusion.configurations import CONFIGURATION_NAMES
-    from mufusion.metrics import compute_metrics
-    from mufusion.plots.run_figures import single_run_figures
-    from mufusion.scenarios import load_scenario
-    from mufusion.scenarios.runner import run_scenario
-
-    if config not in CONFIGURATION_NAMES:
-        _fail(f"--config must be one of {', '.join(CONFIGURATION_NAMES)}, got {config!r}")
-    try:
-        cfg = load_scenario(scenario, list(set_ or []))
+    try:  # before the heavy imports below: bad input is refused at once
+        cfg = cli_input.run_input(scenario, config, list(set_ or []), out)
     except ValueError as err:
         _fail(str(err))
-    _check_out_dir(out)
+    from mufusion.metrics import compute_metrics
+    from mufusion.plots.run_figures import single_run_figures
+    from mufusion.scenarios.runner import run_scenario
+
     with _progress() as progress:
         task = progress.add_task(f"{cfg.name} / {config}", total=cfg.duration_s)
         log = run_scenario(cfg, config, progress=lambda t: progress.update(task, completed=t))
@@ -129,13 +114,15 @@ def reproduce(
     ] = False,
 ) -> None:
     """Reproduce the paper: every configuration in both scenarios, figures and a report."""
+    try:
+        cli_input.check_jobs(jobs)
+        cli_input.check_out_dir(out)
+    except ValueError as err:
+        _fail(str(err))
     from mufusion.plots.run_figures import reproduction_figures
     from mufusion.reproduction import explain_differences, reproduction_specs, write_report
     from mufusion.reproduction.ablation import ablation_specs
 
-    if jobs is not None and jobs < 1:
-        _fail(f"--jobs must be >= 1, got {jobs}")
-    _check_out_dir(out)
     specs = reproduction_specs(include_car=car)
     extra = ablation_specs() if ablation else []
     started = time.perf_counter()
@@ -195,43 +182,25 @@ def campaign(
     results.parquet / results.csv. Exit code 0: every run completed; 1: some runs failed (they
     are rows with their error); 2: invalid input; 130: interrupted (summary marked partial).
     """
-    from mufusion.campaign import (
-        ENGINES,
-        CampaignInterrupted,
-        campaign_specs,
-        execute_campaign,
-        load_campaign,
-        prepare_output,
-        write_results,
-    )
-    from mufusion.campaign.results import result_rows
-
-    if jobs is not None and jobs < 1:
-        _fail(f"--jobs must be >= 1, got {jobs}")
-    if engine not in ENGINES:
-        _fail(f"--engine must be one of {', '.join(ENGINES)}, got {engine!r}")
-    engine_name: Literal["pool", "ray"] = "ray" if engine == "ray" else "pool"
-    if address is not None and engine != "ray":
-        _fail("--address needs --engine ray")
-    parts = shard.split("/")
-    if len(parts) != 2 or not all(p.strip().isdigit() for p in parts):
-        _fail(f"--shard must be K/N with 0 <= K < N, got {shard!r}")
-    k, n = int(parts[0]), int(parts[1])
-    try:
-        plan = load_campaign(file)
-        specs = campaign_specs(plan, shard=k, shards=n)
-        manifest = {"campaign": plan.model_dump(mode="json"), "shard": f"{k}/{n}"}
-        prepare_output(out, manifest, overwrite=overwrite, resume=resume)
+    try:  # before the heavy imports below: bad input is refused at once
+        checked = cli_input.campaign_input(
+            file, out, jobs=jobs, shard=shard, engine=engine, address=address, resume=resume,
+            overwrite=overwrite,
+        )
     except ValueError as err:
         _fail(str(err))
+    from mufusion.campaign import CampaignInterrupted, execute_campaign, write_results
+    from mufusion.campaign.results import result_rows
+
+    plan, specs, k, n = checked.plan, checked.specs, checked.shard, checked.shards
     started = time.perf_counter()
     pending: list = []
     with _progress() as progress:
         task = progress.add_task("runs", total=len(specs))
         try:
             results = execute_campaign(
-                specs, out / "runs", engine=engine_name, jobs=jobs, address=address, resume=resume,
-                on_done=lambda _s: progress.advance(task),
+                specs, out / "runs", engine=checked.engine, jobs=jobs, address=address,
+                resume=resume, on_done=lambda _s: progress.advance(task),
             )
         except CampaignInterrupted as stop:
             results, pending = stop.finished, stop.pending

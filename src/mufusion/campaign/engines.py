@@ -27,17 +27,15 @@ from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal, cast, get_args
+from typing import Any, cast
 
 from threadpoolctl import threadpool_limits
 
+from mufusion.campaign.schema import ENGINES, Engine
 from mufusion.campaign.specs import RunSpec
 from mufusion.metrics import RunMetrics, compute_metrics
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import planner_for, run_scenario
-
-Engine = Literal["pool", "ray"]
-ENGINES: tuple[str, ...] = get_args(Engine)
 
 _log = logging.getLogger(__name__)
 

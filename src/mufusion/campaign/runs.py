@@ -14,8 +14,9 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from mufusion.campaign.engines import Engine, RunPayload, dispatch
+from mufusion.campaign.engines import RunPayload, dispatch
 from mufusion.campaign.results import RunResult, with_gt_comparison
+from mufusion.campaign.schema import Engine
 from mufusion.campaign.specs import RunSpec, check_distinct, with_indices
 from mufusion.campaign.storage import publish_run, read_result, remove_temporaries
 from mufusion.metrics import RunMetrics

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
@@ -19,6 +19,10 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
+
+Engine = Literal["pool", "ray"]
+"""Where a campaign's runs execute (``--engine``; :mod:`mufusion.campaign.engines`)."""
+ENGINES: tuple[str, ...] = get_args(Engine)
 
 GridValue = bool | int | float | str
 """A value of one grid axis, as TOML gives it."""

@@ -5,18 +5,23 @@ The layer between estimation and planning: each configuration combines the emula
 one ``step`` that returns a :class:`FrictionEstimate` over the grid ahead.
 """
 
+from typing import TYPE_CHECKING
+
+from mufusion._lazy import lazy_getattr
 from mufusion.configurations.registry import (
     CONFIGURATION_NAMES,
     PAPER_CONFIGURATIONS,
     Configuration,
 )
-from mufusion.configurations.sources import (
-    MU_HAT_MAX,
-    MU_HAT_MIN,
-    FrictionConfiguration,
-    FrictionEstimate,
-    make_configuration,
-)
+
+if TYPE_CHECKING:
+    from mufusion.configurations.sources import (
+        MU_HAT_MAX,
+        MU_HAT_MIN,
+        FrictionConfiguration,
+        FrictionEstimate,
+        make_configuration,
+    )
 
 __all__ = [
     "CONFIGURATION_NAMES",
@@ -28,3 +33,11 @@ __all__ = [
     "FrictionEstimate",
     "make_configuration",
 ]
+
+# The sources (and the fusion, SciPy with it) load on first use: checking a --config name or a
+# campaign file needs the registry only.
+__getattr__ = lazy_getattr(__name__, {
+    name: "sources"
+    for name in ("MU_HAT_MAX", "MU_HAT_MIN", "FrictionConfiguration", "FrictionEstimate",
+                 "make_configuration")
+})

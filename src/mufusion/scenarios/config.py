@@ -20,8 +20,7 @@ from mufusion.planner.ocp import PlannerConfig
 from mufusion.planner.safety import SafetySettings
 from mufusion.road import FrictionMap, Obstacle, Road, straight_road, turn_road
 from mufusion.sim.faults import Fault
-from mufusion.sim.loop import LoopRates
-from mufusion.sim.supervision import LaneRecoverySettings, ProbingSettings
+from mufusion.sim.settings import LaneRecoverySettings, LoopRates, ProbingSettings
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.surface_tires import (
     AUTHORS_TIRES,

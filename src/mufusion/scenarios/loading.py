@@ -19,7 +19,7 @@ from pydantic import BaseModel, TypeAdapter, ValidationError
 from mufusion.planner.safety import SafetySettings
 from mufusion.scenarios.config import SCENARIO_KINDS, PopupScenario, ScenarioConfig, TurnScenario
 from mufusion.sim.faults import Fault
-from mufusion.sim.supervision import LaneRecoverySettings, ProbingSettings
+from mufusion.sim.settings import LaneRecoverySettings, ProbingSettings
 
 if sys.version_info >= (3, 11):
     import tomllib

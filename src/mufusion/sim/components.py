@@ -10,7 +10,6 @@ A friction source, planner, controller or plant of your own plugs into
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -18,51 +17,11 @@ import numpy as np
 from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan, PlannerMemory, PlannerObstacle
 from mufusion.planner.ocp import PlannerMode
+from mufusion.sim.settings import LoopRates as LoopRates  # the schema reads it from there
 from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.plant import PlantOutput, PlantStateVector
 
 PlanningMode = PlannerMode
-
-
-@dataclass(frozen=True)
-class LoopRates:
-    """Rates of the loop's components [Hz]; the plant rate must be a multiple of the others.
-
-    Raises
-    ------
-    ValueError
-        If a rate is not positive and finite, or the rates do not divide into whole steps
-        (the message names the rate).
-    """
-
-    plant_hz: float = 200.0
-    controller_hz: float = 50.0
-    planner_hz: float = 10.0
-
-    def __post_init__(self) -> None:
-        for name in ("plant_hz", "controller_hz", "planner_hz"):
-            value = getattr(self, name)
-            if not np.isfinite(value) or value <= 0:
-                raise ValueError(f"{name} must be a positive rate in Hz, got {value!r}")
-        _check_divides("controller_hz", self.controller_hz, "plant_hz", self.plant_hz)
-        _check_divides("planner_hz", self.planner_hz, "plant_hz", self.plant_hz)
-        _check_divides("planner_hz", self.planner_hz, "controller_hz", self.controller_hz)
-
-    @property
-    def controller_every(self) -> int:
-        return round(self.plant_hz / self.controller_hz)
-
-    @property
-    def planner_every(self) -> int:
-        return round(self.plant_hz / self.planner_hz)
-
-
-def _check_divides(name: str, value: float, base_name: str, base: float) -> None:
-    ratio = base / value
-    if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
-        raise ValueError(
-            f"{name} must divide {base_name}={base:g} Hz into whole steps, got {value:g} Hz"
-        )
 
 
 class FrictionSource(Protocol):

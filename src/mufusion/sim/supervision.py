@@ -73,7 +73,6 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -81,79 +80,12 @@ from mufusion.configurations import MU_HAT_MAX, FrictionEstimate
 from mufusion.fusion import Z95, local_surface_bound
 from mufusion.planner import PlannerObstacle
 from mufusion.road.geometry import rectangle_corners, signed_clearance_m
+
+# The settings live apart (the scenario schema reads them); importers of this module keep them.
+from mufusion.sim.settings import LaneRecoverySettings as LaneRecoverySettings
+from mufusion.sim.settings import ProbingSettings
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import State
-
-
-@dataclass(frozen=True)
-class ProbingSettings:
-    """When and how hard the loop may probe the friction (see the module docstring)."""
-
-    enabled: bool = True
-    # The estimator measures above a utilisation of 0.5; braking with a share of the weight on
-    # each axle, that is 0.5 μ g of deceleration. The ceiling covers the highest friction the
-    # camera's classes declare (dry, 0.8 ± 0.2: 4.9 m/s² on μ 1.0); the ramp's 10 m/s³ reaches it
-    # in 0.5 s, and the probe ends at the first planning step that sees the estimate. A ceiling of
-    # 3 m/s² never measured on μ 0.9 (docs/experiments.md, "A probe that measures on dry roads").
-    max_decel_mps2: float = 5.0
-    ramp_s: float = 0.5
-    max_duration_s: float = 0.8
-    max_speed_loss_mps: float = 2.0
-    stale_after_s: float = 1.0
-    min_band: float = 0.1
-    straight_curvature_1pm: float = 0.01
-    straight_ahead_m: float = 10.0
-    clear_distance_m: float = 60.0
-    cooldown_s: float = 2.0
-    min_speed_mps: float = 5.0
-
-    def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            value = getattr(self, f.name)
-            if f.name == "enabled":
-                continue
-            if isinstance(value, bool) or not (math.isfinite(value) and value > 0.0):
-                raise ValueError(f"probing.{f.name} must be a finite number > 0, got {value!r}")
-        if self.max_decel_mps2 > 8.0:
-            raise ValueError(
-                f"probing.max_decel_mps2 must be <= 8 m/s² (a probe, not an emergency stop), "
-                f"got {self.max_decel_mps2}"
-            )
-
-
-@dataclass(frozen=True)
-class LaneRecoverySettings:
-    """When the loop may relax μ̂ towards the posterior mean (see the module docstring)."""
-
-    enabled: bool = True
-    violation_tolerance_m: float = 0.05
-    steps: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0)
-    # Evading, when every candidate and a plan at the posterior's upper 95 % edge hit the
-    # obstacle: brake in lane instead (see the module docstring).
-    brake_when_futile: bool = True
-    # Long enough for the brakes' lag and the local estimator's buffer at 10 Hz planning, short
-    # enough that an evasion from the probe's end stays within reach of one from its start.
-    stop_probe_s: float = 0.3
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.brake_when_futile, bool):
-            raise ValueError("lane_recovery.brake_when_futile must be true or false, "
-                             f"got {self.brake_when_futile!r}")
-        if not (math.isfinite(self.stop_probe_s) and 0.0 <= self.stop_probe_s <= 1.0):
-            raise ValueError(
-                "lane_recovery.stop_probe_s must be finite and in [0, 1] s (0: no braking "
-                f"probe), got {self.stop_probe_s!r}"
-            )
-        if not (math.isfinite(self.violation_tolerance_m) and self.violation_tolerance_m >= 0.0):
-            raise ValueError(
-                "lane_recovery.violation_tolerance_m must be finite and >= 0 m, "
-                f"got {self.violation_tolerance_m!r}"
-            )
-        steps = tuple(self.steps)
-        if not steps or any(not 0.0 < a <= 1.0 for a in steps) or list(steps) != sorted(steps):
-            raise ValueError(
-                f"lane_recovery.steps must be increasing fractions in (0, 1], got {self.steps!r}"
-            )
 
 
 def planned_footprint_violation_m(

@@ -22,7 +22,6 @@ from enum import IntEnum
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
 
 from mufusion.vehicle.params import GRAVITY_MPS2, TireParams, VehicleParams
 from mufusion.vehicle.surface_tires import SurfaceTireTable, tire_for_surface
@@ -183,6 +182,10 @@ def secant_stiffness_factor(tire: TireParams, utilization: float) -> float:
     """
     if not 0.0 < utilization <= 1.0:
         raise ValueError(f"utilization must be in (0, 1], got {utilization}")
+    # SciPy's root finder is imported here, where it is used: importing it with the module took
+    # 0.4 s from every command that only reads a scenario (docs/performance.md, "Input errors").
+    from scipy.optimize import brentq
+
     c, e = tire.shape_lateral, tire.curvature_lateral
 
     def normalised(y: float) -> float:
