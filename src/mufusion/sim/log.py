@@ -3,12 +3,17 @@
 The tables and their columns are the record types of :mod:`mufusion.sim.records`; a saved run is
 checked against them when it is loaded, so a reader never meets a missing or renamed column.
 
-Files in a run directory: ``meta.json`` (:class:`~mufusion.sim.records.RunMeta`) and one
-``<table>.csv`` per record type.
+Files in a run directory: one ``<table>.csv`` per record type and ``meta.json``
+(:class:`~mufusion.sim.records.RunMeta`, plus ``"tables"``: each table's row count and the SHA-256
+of its file). ``meta.json`` is written last, so it vouches for the tables: a table that a crash
+truncated or a hand altered is refused on load, naming the file. A run saved before the stamps
+existed (no ``"tables"``) loads unchecked.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import os
 import tempfile
@@ -18,6 +23,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from pydantic import BaseModel, ConfigDict
 
 from mufusion.sim.records import (
     RECORD_TYPES,
@@ -34,6 +40,22 @@ from mufusion.sim.records import (
 TABLES: tuple[str, ...] = tuple(RECORD_TYPES)
 
 Record = Tick | PlanningStep | StepTiming | Event | PlanStages | EstimateGrid
+
+STAMPS_KEY = "tables"
+"""The key of ``meta.json`` that holds each table's :class:`TableStamp`."""
+
+
+class TableStamp(BaseModel):
+    """What ``meta.json`` records of one table's file: its data rows and its SHA-256 (hex)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    rows: int
+    sha256: str
+
+
+def _stamp(data: bytes, rows: int) -> TableStamp:
+    return TableStamp(rows=rows, sha256=hashlib.sha256(data).hexdigest())
 
 
 class RunLog:
@@ -102,15 +124,20 @@ class RunLog:
         """Write the log into ``directory`` (created if needed); returns the directory.
 
         Each file is written under a temporary name and renamed, so a reader (or an interrupted
-        campaign) never sees a half-written file.
+        campaign) never sees a half-written file; ``meta.json`` comes last, with each table's
+        row count and checksum.
         """
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        _write_atomic(out / "meta.json", self.meta.model_dump_json(indent=1))
+        stamps = {}
         for table in TABLES:
-            _write_atomic(
-                out / f"{table}.csv", self.frame(table).to_csv(index=False, float_format="%.9g")
-            )
+            frame = self.frame(table)
+            text = frame.to_csv(index=False, float_format="%.9g")
+            _write_atomic(out / f"{table}.csv", text)
+            stamps[table] = _stamp(text.encode("utf-8"), len(frame)).model_dump()
+        # Last: meta.json vouches for the tables written before it.
+        meta = json.loads(self.meta.model_dump_json())
+        _write_atomic(out / "meta.json", json.dumps({**meta, STAMPS_KEY: stamps}, indent=1))
         return out
 
 
@@ -151,21 +178,27 @@ def load_run(directory: str | Path) -> RunLog:
     ------
     ValueError
         If ``directory`` is not a run directory (no ``meta.json``), the metadata does not match
-        :class:`~mufusion.sim.records.RunMeta`, or a table lacks one of its record's columns
-        (the message names them).
+        :class:`~mufusion.sim.records.RunMeta`, a table's file is missing, truncated or altered
+        (its row count or checksum differs from ``meta.json``'s), or a table lacks one of its
+        record's columns (the message names the file).
     """
     path = Path(directory)
     meta_file = path / "meta.json"
     if not meta_file.is_file():
         raise ValueError(f"{str(path)!r} is not a mufusion run directory (no meta.json)")
     try:
-        meta = RunMeta.model_validate_json(meta_file.read_text(encoding="utf-8"))
-    except ValueError as err:
+        raw = json.loads(meta_file.read_text(encoding="utf-8"))
+        stamps = raw.pop(STAMPS_KEY, None) if isinstance(raw, dict) else None
+        meta = RunMeta.model_validate_json(json.dumps(raw))
+        checked = {t: TableStamp.model_validate(v) for t, v in (stamps or {}).items()}
+    except (ValueError, AttributeError) as err:
         raise ValueError(f"{str(meta_file)!r} is not a valid run metadata file: {err}") from None
     log = RunLog(meta)
     for table, record_type in RECORD_TYPES.items():
         file = path / f"{table}.csv"
         frame = _read_table(file)
+        if table in checked:
+            _check_stamp(file, frame, checked[table])
         if frame is None:
             frame = _to_frame(record_type, [])
         missing = [c for c in columns(record_type) if c not in frame.columns]
@@ -173,6 +206,20 @@ def load_run(directory: str | Path) -> RunLog:
             raise ValueError(f"{str(file)!r} lacks the columns {missing} of table {table!r}")
         log._frames[table] = frame
     return log
+
+
+def _check_stamp(file: Path, frame: pd.DataFrame | None, stamp: TableStamp) -> None:
+    """Raise ``ValueError`` naming ``file`` if it is not the table ``meta.json`` vouches for."""
+    if not file.is_file():
+        raise ValueError(f"{str(file)!r} is missing: its run's meta.json records "
+                         f"{stamp.rows} rows")
+    rows = 0 if frame is None else len(frame)
+    if rows != stamp.rows:
+        raise ValueError(f"{str(file)!r} has {rows} rows, its run's meta.json records "
+                         f"{stamp.rows}: the file was truncated or altered")
+    if _stamp(file.read_bytes(), rows).sha256 != stamp.sha256:
+        raise ValueError(f"{str(file)!r} does not match the checksum in its run's meta.json "
+                         "(SHA-256): the file was altered")
 
 
 def _read_table(file: Path) -> pd.DataFrame | None:
