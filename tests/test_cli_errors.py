@@ -11,7 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 from mufusion.cli import app
-from tests.processes import child_environment
+from processes import child_environment
 
 
 def _run(*args: str):

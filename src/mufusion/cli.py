@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import logging
 import shlex
+import signal
 import time
 from pathlib import Path
 from typing import Annotated, NoReturn
@@ -180,7 +181,8 @@ def campaign(
     Writes every run's log under OUT/runs, summary.json (a `runs` list: parameters, metrics,
     utilisation against the variant's GT run, or the run's error) and the same rows as one table,
     results.parquet / results.csv. Exit code 0: every run completed; 1: some runs failed (they
-    are rows with their error); 2: invalid input; 130: interrupted (summary marked partial).
+    are rows with their error); 2: invalid input; 130 / 143: interrupted by Ctrl-C (SIGINT) /
+    SIGTERM (summary marked partial, the resume command printed).
     """
     try:  # before the heavy imports below: bad input is refused at once
         checked = cli_input.campaign_input(
@@ -195,6 +197,7 @@ def campaign(
     plan, specs, k, n = checked.plan, checked.specs, checked.shard, checked.shards
     started = time.perf_counter()
     pending: list = []
+    stopped_by: signal.Signals | None = None  # the signal that interrupted the campaign
     with _progress() as progress:
         task = progress.add_task("runs", total=len(specs))
         try:
@@ -203,12 +206,14 @@ def campaign(
                 resume=resume, on_done=lambda _s: progress.advance(task),
             )
         except CampaignInterrupted as stop:
-            results, pending = stop.finished, stop.pending
+            results, pending, stopped_by = stop.finished, stop.pending, stop.signal
         except ValueError as err:
             _fail(str(err))
     elapsed = time.perf_counter() - started
     info = {"campaign": str(file), "name": plan.name, "shard": f"{k}/{n}", "engine": engine,
             "elapsed_s": round(elapsed, 1)}
+    if stopped_by is not None and pending:
+        info["interrupted_by"] = stopped_by.name
     summary = write_results(out, results, info, partial=bool(pending), pending=len(pending))
     rows = result_rows(results, out)
     if len(rows) <= MAX_TABLE_ROWS:
@@ -221,17 +226,17 @@ def campaign(
         f"{len(rows) - len(failed)} runs completed ({resumed} found complete), {len(failed)} "
         f"failed in {elapsed:.0f} s; summary: {summary}, table: {out / 'results.parquet'}"
     )
-    if pending:
+    if stopped_by is not None and pending:
         again = ["mufusion", "campaign", str(file), "--out", str(out), "--resume"]
         again += [] if shard == "0/1" else ["--shard", shard]
         again += [] if engine == "pool" else ["--engine", engine]
         again += [] if address is None else ["--address", address]
         again += [] if jobs is None else ["--jobs", str(jobs)]
         console.print(
-            f"[yellow]interrupted:[/yellow] {len(pending)} runs did not run; summary.json is "
-            f"marked partial. Resume with:\n  {shlex.join(again)}"
+            f"[yellow]interrupted ({stopped_by.name}):[/yellow] {len(pending)} runs did not run; "
+            f"summary.json is marked partial. Resume with:\n  {shlex.join(again)}"
         )
-        raise typer.Exit(code=130)
+        raise typer.Exit(code=128 + stopped_by.value)
     if failed:
         raise typer.Exit(code=1)
 

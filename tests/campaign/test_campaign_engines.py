@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import json
 import signal
+import socket
 import subprocess
 import time
 from pathlib import Path
 
 import pytest
 
-from mufusion.campaign.engines import dispatch
+from mufusion.campaign.engines import check_reachable, dispatch
 from mufusion.campaign.stats import WALL_CLOCK_SUFFIX
 from processes import isolated, mufusion_command, wait_until_session_empty
 
@@ -104,3 +105,26 @@ def test_sigint_stops_a_ray_campaign_and_its_local_instance(tmp_path):
     assert summary["completed"] + summary["pending"] == 40
     assert "--resume" in output
     assert sorted(_run_directories(out)) == sorted(r["run"] for r in summary["runs"])
+
+
+def test_a_listening_address_is_reachable_and_a_closed_one_is_named(tmp_path):
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen()
+        port = server.getsockname()[1]
+        check_reachable(f"127.0.0.1:{port}", timeout_s=5.0)
+        check_reachable(f"ray://127.0.0.1:{port}", timeout_s=5.0)
+    with pytest.raises(ValueError, match=f"no Ray cluster answers at '127.0.0.1:{port}'"):
+        check_reachable(f"127.0.0.1:{port}", timeout_s=5.0)  # closed now
+
+
+def test_a_ray_address_where_nothing_answers_fails_in_bounded_time_naming_it(tmp_path):
+    out = tmp_path / "out"
+    cmd = mufusion_command("campaign", str(_campaign(tmp_path, seeds=2)), "--out", str(out),
+                           "--engine", "ray", "--address", "127.0.0.1:9")  # discard: closed
+    started = time.monotonic()
+    with isolated(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
+        output, _ = proc.communicate(timeout=60)
+    assert time.monotonic() - started < 30.0, output
+    assert proc.returncode == 2, output
+    assert "no Ray cluster answers at '127.0.0.1:9'" in " ".join(output.split())

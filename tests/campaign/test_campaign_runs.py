@@ -133,3 +133,49 @@ def test_sigint_to_the_command_stops_it_with_a_partial_summary(tmp_path):
     assert "--resume" in output
     names = sorted(p.name for p in (out / "runs").iterdir())
     assert names == sorted(r["run"] for r in summary["runs"])  # no half-written directory
+
+
+def test_sigterm_in_the_parent_interrupts_like_ctrl_c_and_the_handler_is_restored(tmp_path):
+    before = signal.getsignal(signal.SIGTERM)
+
+    def terminated_after_first(spec: RunSpec) -> None:
+        os.kill(os.getpid(), signal.SIGTERM)  # what a scheduler sends on preemption
+
+    with pytest.raises(CampaignInterrupted) as stop:
+        execute_campaign(_specs(3), tmp_path / "runs", jobs=1, on_done=terminated_after_first)
+    assert stop.value.signal == signal.SIGTERM
+    assert len(stop.value.finished) == 1 and len(stop.value.pending) == 2
+    assert signal.getsignal(signal.SIGTERM) == before
+
+
+@pytest.mark.slow
+def test_sigterm_to_the_process_group_leaves_a_partial_summary_and_the_resume_command(tmp_path):
+    # A cluster scheduler preempting the job signals every process of it: the command, its pool
+    # workers. The workers must not die as failed runs; the command writes the summary.
+    file = tmp_path / "c.toml"
+    file.write_text('scenarios = ["popup"]\nconfigs = ["GT", "F"]\nseeds = 100\n'
+                    'overrides = ["duration_s=1.5", "estimation.local_error=random"]\n')
+    out = tmp_path / "out"
+    cmd = mufusion_command("campaign", str(file), "--out", str(out), "--jobs", "2")
+    with isolated(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
+        deadline = time.monotonic() + 120.0
+        while time.monotonic() < deadline and proc.poll() is None:
+            if (out / "runs").is_dir() and any(not p.name.startswith(".") for p in
+                                               (out / "runs").iterdir()):
+                break
+            time.sleep(0.05)
+        signalled = time.monotonic()
+        os.killpg(proc.pid, signal.SIGTERM)
+        output, _ = proc.communicate(timeout=60)
+        assert proc.returncode == 128 + signal.SIGTERM, output
+        assert time.monotonic() - signalled < 30.0
+        assert wait_until_session_empty(proc.pid, timeout_s=30.0) == []  # workers stopped
+    said = " ".join(output.split())
+    assert "interrupted (SIGTERM)" in said and "Resume with:" in said
+    assert f"--out {out} --resume --jobs 2" in said
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["partial"] is True and summary["interrupted_by"] == "SIGTERM"
+    assert 1 <= summary["completed"] < 200 and summary["failed"] == 0
+    assert summary["completed"] + summary["pending"] == 200
+    names = sorted(p.name for p in (out / "runs").iterdir())
+    assert names == sorted(r["run"] for r in summary["runs"])  # no half-written directory

@@ -11,8 +11,10 @@ worker on another machine needs no shared file system.
 ``ray``
     Ray tasks: a local Ray instance with ``jobs`` CPUs, or the cluster at ``address``.
 
-On Ctrl-C (``KeyboardInterrupt`` in the parent, also one raised by the ``handle`` callback) an
-engine cancels the queued runs, stops the running ones and re-raises.
+On Ctrl-C (``KeyboardInterrupt`` in the parent, also one raised by the ``handle`` callback, or
+by the campaign's SIGTERM handler) an engine cancels the queued runs, stops the running ones and
+re-raises. Pool workers ignore SIGINT and SIGTERM, which a terminal or a scheduler sends to the
+whole process group: the parent decides, and stops them itself.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from __future__ import annotations
 import logging
 import os
 import signal
+import socket
 import tempfile
 import threading
 from collections.abc import Callable, Iterable, Sequence
@@ -38,6 +41,10 @@ from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import planner_for, run_scenario
 
 _log = logging.getLogger(__name__)
+
+RAY_CONNECT_TIMEOUT_S = 10.0
+"""How long a Ray cluster's address may take to accept a connection before the campaign gives
+up on it [s] (``ray.init`` itself retries an address where nothing answers for minutes)."""
 
 
 @dataclass(frozen=True)
@@ -151,8 +158,10 @@ def _set_up_worker(log_level: int) -> None:
 
 
 def _pool_worker(log_level: int) -> None:
-    # The parent decides what Ctrl-C means: it stops the workers itself.
+    # The parent decides what Ctrl-C and SIGTERM mean: it stops the workers itself (a worker
+    # killed by a group-wide SIGTERM would turn its run into a failure instead of a pending one).
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     _set_up_worker(log_level)
 
 
@@ -199,14 +208,13 @@ def _stop_pool(pool: ProcessPoolExecutor) -> None:
     result_queue: Any = pool._result_queue
     pool.shutdown(wait=False, cancel_futures=True)
     processes.update({p.pid: p for p in list((pool._processes or {}).values())})
+    # SIGKILL: the workers ignore SIGTERM, and they hold nothing to clean up (the parent
+    # writes every file).
     for process in processes.values():
-        if process.is_alive():
-            process.terminate()
-    for process in processes.values():
-        process.join(timeout=10.0)
         if process.is_alive():
             process.kill()
-            process.join(timeout=10.0)
+    for process in processes.values():
+        process.join(timeout=10.0)
     # A worker terminated while sending its result leaves a partial message in the result
     # pipe: the executor's manager thread then blocks reading the rest, and the interpreter's
     # exit, which joins that thread, hangs. With the workers gone the parent holds the pipe's
@@ -216,6 +224,33 @@ def _stop_pool(pool: ProcessPoolExecutor) -> None:
         result_queue._writer.close()
     if manager is not None:
         manager.join(timeout=10.0)
+
+
+def check_reachable(address: str, timeout_s: float = RAY_CONNECT_TIMEOUT_S) -> None:
+    """Raise ``ValueError`` naming ``address`` if nothing accepts a connection at its host and
+    port within ``timeout_s``.
+
+    ``address`` is a Ray cluster address, ``host:port`` or ``ray://host:port``; one without a
+    port (Ray's ``"auto"``) is left to Ray.
+
+    Examples
+    --------
+    >>> check_reachable("127.0.0.1:9", timeout_s=1.0)  # the discard port: nothing listens
+    Traceback (most recent call last):
+    ...
+    ValueError: no Ray cluster answers at '127.0.0.1:9' ...
+    """
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not port.isdigit():
+        return
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
+            pass
+    except OSError as err:
+        raise ValueError(
+            f"no Ray cluster answers at {address!r} (connecting to {host}:{port}: "
+            f"{err.strerror or err}); check --address and that the cluster is up"
+        ) from None
 
 
 def _dispatch_ray(
@@ -233,6 +268,8 @@ def _dispatch_ray(
         ) from None
     started = not ray.is_initialized()
     if started:
+        if address is not None:
+            check_reachable(address)
         if address is None:
             warm_up_solvers(specs)  # the local workers share this machine's solver cache
         try:

@@ -2,14 +2,18 @@
 store each result atomically as it arrives, and hand back every finished run.
 
 Nothing is lost: a failing run becomes a result with its error while the others go on; on Ctrl-C
-the engine stops its workers and :class:`CampaignInterrupted` carries what finished, so the
-caller can still write the summary and a later call with ``resume=True`` picks up from there.
+(SIGINT) or SIGTERM (what a cluster scheduler sends on preemption, or ``kill``) the engine stops
+its workers and :class:`CampaignInterrupted` carries what finished, so the caller can still write
+the summary and a later call with ``resume=True`` picks up from there.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Sequence
+import signal
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -24,14 +28,40 @@ from mufusion.scenarios import load_scenario
 
 
 class CampaignInterrupted(KeyboardInterrupt):
-    """Ctrl-C stopped a campaign; ``finished`` holds the runs that completed or failed before
-    it (GT comparison filled in) and ``pending`` the ones that did not run."""
+    """A signal stopped a campaign; ``finished`` holds the runs that completed or failed before
+    it (GT comparison filled in), ``pending`` the ones that did not run and ``signal`` the
+    signal (``SIGINT`` for Ctrl-C, or ``SIGTERM``)."""
 
-    def __init__(self, finished: list[RunResult], pending: list[RunSpec]):
-        super().__init__(f"campaign interrupted: {len(finished)} runs finished, "
-                         f"{len(pending)} did not run")
+    def __init__(self, finished: list[RunResult], pending: list[RunSpec],
+                 signal: signal.Signals = signal.SIGINT):
+        super().__init__(f"campaign interrupted by {signal.name}: {len(finished)} runs "
+                         f"finished, {len(pending)} did not run")
         self.finished = finished
         self.pending = pending
+        self.signal = signal
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread where Ctrl-C raises ``KeyboardInterrupt``."""
+
+
+@contextmanager
+def _sigterm_stops_like_ctrl_c() -> Iterator[None]:
+    """While active, SIGTERM raises :class:`_Terminated` in the main thread (once: a repeat while
+    the workers are being stopped is ignored), so it ends a campaign as Ctrl-C does."""
+    if threading.current_thread() is not threading.main_thread():
+        yield  # signal handlers can only be set in the main thread
+        return
+
+    def terminate(_signum: int, _frame: object) -> None:
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        raise _Terminated
+
+    previous = signal.signal(signal.SIGTERM, terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def spec_record(spec: RunSpec) -> dict[str, Any]:
@@ -77,7 +107,8 @@ def execute_campaign(
         If ``jobs`` < 1, two specs are the same run, or a spec names an unknown scenario,
         configuration or key (checked before anything runs).
     CampaignInterrupted
-        On Ctrl-C, after the workers stopped; it carries the finished runs.
+        On Ctrl-C (SIGINT) or SIGTERM, after the workers stopped; it carries the finished runs
+        and the signal.
     """
     specs = with_indices(specs)
     check_distinct(specs)
@@ -99,19 +130,23 @@ def execute_campaign(
             on_done(spec)
 
     try:
-        if resume:
-            for spec in specs:
-                found = _completed_run(runs_dir / spec.name, spec, seeds[spec])
-                if found is not None:
-                    results[spec] = found
-                    if on_done:
-                        on_done(spec)
-        todo = [s for s in specs if s not in results]
-        dispatch(todo, store, engine=engine, jobs=jobs, address=address)
-    except KeyboardInterrupt:
+        with _sigterm_stops_like_ctrl_c():
+            if resume:
+                for spec in specs:
+                    found = _completed_run(runs_dir / spec.name, spec, seeds[spec])
+                    if found is not None:
+                        results[spec] = found
+                        if on_done:
+                            on_done(spec)
+            todo = [s for s in specs if s not in results]
+            dispatch(todo, store, engine=engine, jobs=jobs, address=address)
+    except KeyboardInterrupt as stop:
         remove_temporaries(runs_dir)
         finished = with_gt_comparison(results[s] for s in specs if s in results)
-        raise CampaignInterrupted(finished, [s for s in specs if s not in results]) from None
+        raise CampaignInterrupted(
+            finished, [s for s in specs if s not in results],
+            signal.SIGTERM if isinstance(stop, _Terminated) else signal.SIGINT,
+        ) from None
     return with_gt_comparison(results[s] for s in specs)
 
 
