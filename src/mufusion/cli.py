@@ -397,15 +397,9 @@ def _progress() -> Progress:
 
 
 def _print_table(rows: list[dict]) -> None:
-    from mufusion.metrics import TABLE_COLUMNS, format_cell
+    from mufusion.cli_table import print_outcome_table
 
-    table = Table(title="outcome (full names and all metrics in summary.json)")
-    cols = [c for c in TABLE_COLUMNS if c.terminal and any(c.key in r for r in rows)]
-    for col in cols:
-        table.add_column(col.header, overflow="fold")
-    for r in rows:
-        table.add_row(*[format_cell(r.get(col.key), col) for col in cols])
-    Console().print(table)
+    print_outcome_table(rows, Console())
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -27,9 +27,9 @@ def saved(tmp_path: Path) -> Path:
 
 def test_a_saved_log_loads_and_its_meta_records_every_table(saved: Path) -> None:
     meta = json.loads((saved / "meta.json").read_text())
-    assert meta[STAMPS_KEY]["timeseries"]["rows"] == 50
-    assert meta[STAMPS_KEY]["planning_steps"]["rows"] == 5
-    assert meta[STAMPS_KEY]["events"]["rows"] == 1
+    assert meta[STAMPS_KEY]["timeseries.csv"]["rows"] == 50
+    assert meta[STAMPS_KEY]["planning_steps.csv"]["rows"] == 5
+    assert meta[STAMPS_KEY]["events.csv"]["rows"] == 1
     back = load_run(saved)
     assert len(back.timeseries) == 50 and back.events["kind"].tolist() == ["camera_dropout"]
 

@@ -68,6 +68,10 @@ class RunMetrics:
     robust_qp_retries
         Planning steps whose fast QP failed and were solved again in the robust mode
         (:mod:`mufusion.planner.acados_backend`); a retry that also fails is a fallback.
+    solver_messages
+        Messages the solver library printed during the run (e.g. ``SQP_RTI: QP solver returned
+        error status 3``), kept in the log's ``solver_messages.txt``
+        (:mod:`mufusion.sim.solver_output`).
     feasibility, feasibility_margin_mps
         The physics oracle's class of the variant (feasible / marginal / infeasible) and its
         margin [m/s] (:mod:`mufusion.scenarios.feasibility`), from the run's metadata.
@@ -117,6 +121,7 @@ class RunMetrics:
     faults_injected: int = 0
     # Defaults to 0: records written before the robust retry existed had none.
     robust_qp_retries: int = 0
+    solver_messages: int = 0
     estimate_fallbacks: int = 0
     component_errors: int = 0
     minimal_risk: bool = False
@@ -202,6 +207,7 @@ def compute_metrics(log: RunLog) -> RunMetrics:
         robust_qp_retries=(
             int(steps["robust_qp_retry"].astype(bool).sum()) if not steps.empty else 0
         ),
+        solver_messages=len(log.solver_messages),
         final_speed_mps=float(ts["speed_mps"].iloc[-1]),
         duration_s=float(ts["t_s"].iloc[-1]),
         feasibility=log.meta.feasibility,

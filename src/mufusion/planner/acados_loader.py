@@ -85,4 +85,31 @@ def load_acados_template() -> ModuleType:
                 from acados import acados_template  # type: ignore[no-redef]
             except ImportError as exc:
                 raise AcadosUnavailable(f"acados_template import failed: {exc}") from exc
+    _log_casadi_notice_instead(acados_template)
     return acados_template
+
+
+def _log_casadi_notice_instead(template: ModuleType) -> None:
+    """Replace the template's ``check_casadi_version`` with one that logs its notice once.
+
+    The template prints (to stdout) a three-line "versions of CasADi are officially supported"
+    notice each time it generates a solver, twice per solver: four times in a first
+    ``reproduce`` with an empty cache. The notice is known and harmless here (code generation works
+    with our CasADi; docs/planner.md); it stays available at INFO level (``--verbose``). Only that
+    function is replaced; every other message of the template still prints.
+    """
+    import casadi
+
+    supported = getattr(sys.modules.get(f"{template.__name__}.utils"), "ALLOWED_CASADI_VERSIONS",
+                        ())
+
+    @functools.lru_cache(maxsize=1)
+    def check_casadi_version() -> None:
+        if casadi.__version__ not in supported:
+            _log.info("acados_template is tested with CasADi %s; this is CasADi %s",
+                      " or ".join(supported), casadi.__version__)
+
+    for name in ("utils", "acados_ocp_solver", "acados_sim_solver"):
+        module = sys.modules.get(f"{template.__name__}.{name}")
+        if module is not None and hasattr(module, "check_casadi_version"):
+            module.check_casadi_version = check_casadi_version  # type: ignore[attr-defined]

@@ -44,6 +44,7 @@ from mufusion.sim.records import (
     RunMeta,
     VehicleGeometry,
 )
+from mufusion.sim.solver_output import captured_output
 from mufusion.sim.world import World
 from mufusion.vehicle.params import VehicleParams, vehicle_preset
 from mufusion.vehicle.plant import Plant, initial_state
@@ -111,7 +112,9 @@ def run_scenario(
 
     Notes
     -----
-    The run limits the BLAS thread pools (OpenBLAS of numpy and scipy) to one thread.
+    The run limits the BLAS thread pools (OpenBLAS of numpy and scipy) to one thread. What the
+    solver library prints meanwhile (to file descriptor 1) is captured into the log's
+    ``solver_messages``.
     """
     configuration = Configuration.parse(configuration)
     # The start's perturbation has its own stream, so the estimators' draws (from the seed
@@ -170,8 +173,11 @@ def run_scenario(
     )
     # One BLAS thread: the fusion's small matrix products gain nothing from a thread pool, and
     # on a busy machine its spinning threads made runs several times slower.
-    with _blas_controller().limit(limits=1, user_api="blas"):
-        return loop.run(cfg.duration_s, progress=progress, warmup_steps=WARMUP_PLANNING_STEPS)
+    # The solver library's printf goes into the log, not onto the terminal (sim.solver_output).
+    with _blas_controller().limit(limits=1, user_api="blas"), captured_output() as messages:
+        log = loop.run(cfg.duration_s, progress=progress, warmup_steps=WARMUP_PLANNING_STEPS)
+    log.solver_messages = messages
+    return log
 
 
 @functools.cache

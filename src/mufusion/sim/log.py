@@ -3,11 +3,12 @@
 The tables and their columns are the record types of :mod:`mufusion.sim.records`; a saved run is
 checked against them when it is loaded, so a reader never meets a missing or renamed column.
 
-Files in a run directory: one ``<table>.csv`` per record type and ``meta.json``
-(:class:`~mufusion.sim.records.RunMeta`, plus ``"tables"``: each table's row count and the SHA-256
-of its file). ``meta.json`` is written last, so it vouches for the tables: a table that a crash
-truncated or a hand altered is refused on load, naming the file. A run saved before the stamps
-existed (no ``"tables"``) loads unchecked.
+Files in a run directory: one ``<table>.csv`` per record type, ``solver_messages.txt`` (what the
+solver library printed during the run, one message a line: :mod:`mufusion.sim.solver_output`) and
+``meta.json`` (:class:`~mufusion.sim.records.RunMeta`, plus ``"files"``: each other file's row
+count and SHA-256). ``meta.json`` is written last, so it vouches for the others: a file that a
+crash truncated or a hand altered is refused on load, naming it. A run saved before the stamps
+existed (no ``"files"``) loads unchecked.
 """
 
 from __future__ import annotations
@@ -41,12 +42,14 @@ TABLES: tuple[str, ...] = tuple(RECORD_TYPES)
 
 Record = Tick | PlanningStep | StepTiming | Event | PlanStages | EstimateGrid
 
-STAMPS_KEY = "tables"
-"""The key of ``meta.json`` that holds each table's :class:`TableStamp`."""
+SOLVER_MESSAGES_FILE = "solver_messages.txt"
+STAMPS_KEY = "files"
+"""The key of ``meta.json`` that holds each other file's :class:`FileStamp`, by file name."""
 
 
-class TableStamp(BaseModel):
-    """What ``meta.json`` records of one table's file: its data rows and its SHA-256 (hex)."""
+class FileStamp(BaseModel):
+    """What ``meta.json`` records of one file of the run: its rows (a table's data rows, a text
+    file's lines) and its SHA-256 (hex)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -54,8 +57,8 @@ class TableStamp(BaseModel):
     sha256: str
 
 
-def _stamp(data: bytes, rows: int) -> TableStamp:
-    return TableStamp(rows=rows, sha256=hashlib.sha256(data).hexdigest())
+def _stamp(data: bytes, rows: int) -> FileStamp:
+    return FileStamp(rows=rows, sha256=hashlib.sha256(data).hexdigest())
 
 
 class RunLog:
@@ -65,10 +68,17 @@ class RunLog:
     ----------
     meta
         The run's metadata.
+
+    Attributes
+    ----------
+    solver_messages
+        What the solver library printed during the run, one message each (the runner fills it;
+        :mod:`mufusion.sim.solver_output`).
     """
 
     def __init__(self, meta: RunMeta) -> None:
         self.meta = meta
+        self.solver_messages: list[str] = []
         self._records: dict[str, list[Any]] = {name: [] for name in TABLES}
         self._frames: dict[str, pd.DataFrame] = {}
 
@@ -124,18 +134,22 @@ class RunLog:
         """Write the log into ``directory`` (created if needed); returns the directory.
 
         Each file is written under a temporary name and renamed, so a reader (or an interrupted
-        campaign) never sees a half-written file; ``meta.json`` comes last, with each table's
-        row count and checksum.
+        campaign) never sees a half-written file; ``meta.json`` comes last, with each other
+        file's row count and checksum.
         """
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        stamps = {}
+        texts = {}
         for table in TABLES:
             frame = self.frame(table)
-            text = frame.to_csv(index=False, float_format="%.9g")
-            _write_atomic(out / f"{table}.csv", text)
-            stamps[table] = _stamp(text.encode("utf-8"), len(frame)).model_dump()
-        # Last: meta.json vouches for the tables written before it.
+            texts[f"{table}.csv"] = (frame.to_csv(index=False, float_format="%.9g"), len(frame))
+        messages = self.solver_messages
+        texts[SOLVER_MESSAGES_FILE] = ("".join(f"{m}\n" for m in messages), len(messages))
+        stamps = {}
+        for name, (text, rows) in texts.items():
+            _write_atomic(out / name, text)
+            stamps[name] = _stamp(text.encode("utf-8"), rows).model_dump()
+        # Last: meta.json vouches for the files written before it.
         meta = json.loads(self.meta.model_dump_json())
         _write_atomic(out / "meta.json", json.dumps({**meta, STAMPS_KEY: stamps}, indent=1))
         return out
@@ -178,9 +192,9 @@ def load_run(directory: str | Path) -> RunLog:
     ------
     ValueError
         If ``directory`` is not a run directory (no ``meta.json``), the metadata does not match
-        :class:`~mufusion.sim.records.RunMeta`, a table's file is missing, truncated or altered
-        (its row count or checksum differs from ``meta.json``'s), or a table lacks one of its
-        record's columns (the message names the file).
+        :class:`~mufusion.sim.records.RunMeta`, a file of the run is missing, truncated or
+        altered (its row count or checksum differs from ``meta.json``'s), or a table lacks one
+        of its record's columns (the message names the file).
     """
     path = Path(directory)
     meta_file = path / "meta.json"
@@ -190,30 +204,34 @@ def load_run(directory: str | Path) -> RunLog:
         raw = json.loads(meta_file.read_text(encoding="utf-8"))
         stamps = raw.pop(STAMPS_KEY, None) if isinstance(raw, dict) else None
         meta = RunMeta.model_validate_json(json.dumps(raw))
-        checked = {t: TableStamp.model_validate(v) for t, v in (stamps or {}).items()}
+        checked = {f: FileStamp.model_validate(v) for f, v in (stamps or {}).items()}
     except (ValueError, AttributeError) as err:
         raise ValueError(f"{str(meta_file)!r} is not a valid run metadata file: {err}") from None
     log = RunLog(meta)
     for table, record_type in RECORD_TYPES.items():
         file = path / f"{table}.csv"
         frame = _read_table(file)
-        if table in checked:
-            _check_stamp(file, frame, checked[table])
+        if file.name in checked:
+            _check_stamp(file, 0 if frame is None else len(frame), checked[file.name])
         if frame is None:
             frame = _to_frame(record_type, [])
         missing = [c for c in columns(record_type) if c not in frame.columns]
         if missing:
             raise ValueError(f"{str(file)!r} lacks the columns {missing} of table {table!r}")
         log._frames[table] = frame
+    messages = path / SOLVER_MESSAGES_FILE
+    if messages.is_file():
+        log.solver_messages = messages.read_text(encoding="utf-8").splitlines()
+    if messages.name in checked:
+        _check_stamp(messages, len(log.solver_messages), checked[messages.name])
     return log
 
 
-def _check_stamp(file: Path, frame: pd.DataFrame | None, stamp: TableStamp) -> None:
-    """Raise ``ValueError`` naming ``file`` if it is not the table ``meta.json`` vouches for."""
+def _check_stamp(file: Path, rows: int, stamp: FileStamp) -> None:
+    """Raise ``ValueError`` naming ``file`` if it is not the file ``meta.json`` vouches for."""
     if not file.is_file():
         raise ValueError(f"{str(file)!r} is missing: its run's meta.json records "
                          f"{stamp.rows} rows")
-    rows = 0 if frame is None else len(frame)
     if rows != stamp.rows:
         raise ValueError(f"{str(file)!r} has {rows} rows, its run's meta.json records "
                          f"{stamp.rows}: the file was truncated or altered")
