@@ -98,16 +98,20 @@ def _log_casadi_notice_instead(template: ModuleType) -> None:
     with our CasADi; docs/planner.md); it stays available at INFO level (``--verbose``). Only that
     function is replaced; every other message of the template still prints.
     """
-    import casadi
+    from importlib.metadata import PackageNotFoundError, version
 
+    try:
+        casadi_version = version("casadi")
+    except PackageNotFoundError:  # CasADi vendored by the acados wheel only
+        casadi_version = "unknown"
     supported = getattr(sys.modules.get(f"{template.__name__}.utils"), "ALLOWED_CASADI_VERSIONS",
                         ())
 
     @functools.lru_cache(maxsize=1)
     def check_casadi_version() -> None:
-        if casadi.__version__ not in supported:
+        if casadi_version not in supported:
             _log.info("acados_template is tested with CasADi %s; this is CasADi %s",
-                      " or ".join(supported), casadi.__version__)
+                      " or ".join(supported), casadi_version)
 
     for name in ("utils", "acados_ocp_solver", "acados_sim_solver"):
         module = sys.modules.get(f"{template.__name__}.{name}")
