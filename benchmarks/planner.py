@@ -6,6 +6,11 @@ input (fine RK4). Per step we time constraint update + solve + read-out. Prints 
 ``median_step_ms``, ``p99_step_ms``, ``max_step_ms``, ``speedup_vs_dompc``; numbers go to
 docs/performance.md, section "## Planner".
 
+``python benchmarks/planner.py --capture`` instead times our planner's step with the solver's
+output captured at the file-descriptor level (as every run does, ``mufusion.sim.solver_output``)
+and without, alternating, three runs each, and prints both medians as a JSON line
+(docs/performance.md, "Quiet output").
+
 ``python benchmarks/planner.py --margins`` instead runs the shipped scenarios (pop-up and turn, all
 five configurations, and the pop-up with ``emergency_on_obstacle=true``) and prints, as a JSON
 line, how far the solutions the planner accepted went towards the limits of its solution check
@@ -221,6 +226,27 @@ def solution_margins() -> dict[str, float]:
     return {key: round(value, 3) for key, value in worst.items()}
 
 
+def capture_cost(config: PlannerConfig, repeats: int = 3) -> dict[str, float]:
+    """Median and p99 planner step [ms] with and without the run's output capture."""
+    from mufusion.sim.solver_output import captured_output
+
+    plain, captured, messages = [], [], 0
+    for _ in range(repeats):  # alternating, so that a busy spell of the machine hits both
+        plain.append(run_ours(config))
+        with captured_output() as lines:
+            captured.append(run_ours(config))
+        messages += len(lines)
+    a, b = np.concatenate(plain), np.concatenate(captured)
+    return {
+        "median_step_ms": round(float(np.median(a)), 3),
+        "median_step_ms_captured": round(float(np.median(b)), 3),
+        "p99_step_ms": round(float(np.percentile(a, 99)), 3),
+        "p99_step_ms_captured": round(float(np.percentile(b, 99)), 3),
+        "steps_each": int(a.size),
+        "messages_captured": messages,
+    }
+
+
 def main() -> None:
     logging.basicConfig(level=logging.WARNING)
     warnings.filterwarnings("ignore")
@@ -228,6 +254,9 @@ def main() -> None:
         print(json.dumps(solution_margins()))
         return
     config = PlannerConfig(lane_d_min_m=LANE[0], lane_d_max_m=LANE[1], use_sampling=True)
+    if "--capture" in sys.argv[1:]:
+        print(json.dumps(capture_cost(config)))
+        return
     ours = run_ours(config)
     theirs = run_dompc(config)
     result = {
