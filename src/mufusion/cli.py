@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import logging
-import shlex
 import signal
 import time
 from pathlib import Path
@@ -185,10 +184,8 @@ def campaign(
     SIGTERM (summary marked partial, the resume command printed).
     """
     try:  # before the heavy imports below: bad input is refused at once
-        checked = cli_input.campaign_input(
-            file, out, jobs=jobs, shard=shard, engine=engine, address=address, resume=resume,
-            overwrite=overwrite,
-        )
+        checked = cli_input.campaign_input(file, out, jobs=jobs, shard=shard, engine=engine,
+                                           address=address, resume=resume, overwrite=overwrite)
     except ValueError as err:
         _fail(str(err))
     from mufusion.campaign import CampaignInterrupted, execute_campaign, write_results
@@ -197,7 +194,7 @@ def campaign(
     plan, specs, k, n = checked.plan, checked.specs, checked.shard, checked.shards
     started = time.perf_counter()
     pending: list = []
-    stopped_by: signal.Signals | None = None  # the signal that interrupted the campaign
+    stopped_by: signal.Signals | None = None  # the signal that left runs pending
     with _progress() as progress:
         task = progress.add_task("runs", total=len(specs))
         try:
@@ -206,14 +203,14 @@ def campaign(
                 resume=resume, on_done=lambda _s: progress.advance(task),
             )
         except CampaignInterrupted as stop:
-            results, pending, stopped_by = stop.finished, stop.pending, stop.signal
+            results, pending = stop.finished, stop.pending
+            stopped_by = stop.signal if pending else None
         except ValueError as err:
             _fail(str(err))
     elapsed = time.perf_counter() - started
     info = {"campaign": str(file), "name": plan.name, "shard": f"{k}/{n}", "engine": engine,
-            "elapsed_s": round(elapsed, 1)}
-    if stopped_by is not None and pending:
-        info["interrupted_by"] = stopped_by.name
+            "elapsed_s": round(elapsed, 1),
+            **({} if stopped_by is None else {"interrupted_by": stopped_by.name})}
     summary = write_results(out, results, info, partial=bool(pending), pending=len(pending))
     rows = result_rows(results, out)
     if len(rows) <= MAX_TABLE_ROWS:
@@ -226,15 +223,12 @@ def campaign(
         f"{len(rows) - len(failed)} runs completed ({resumed} found complete), {len(failed)} "
         f"failed in {elapsed:.0f} s; summary: {summary}, table: {out / 'results.parquet'}"
     )
-    if stopped_by is not None and pending:
-        again = ["mufusion", "campaign", str(file), "--out", str(out), "--resume"]
-        again += [] if shard == "0/1" else ["--shard", shard]
-        again += [] if engine == "pool" else ["--engine", engine]
-        again += [] if address is None else ["--address", address]
-        again += [] if jobs is None else ["--jobs", str(jobs)]
+    if stopped_by is not None:
+        again = cli_input.resume_command(file, out, shard=shard, engine=engine, address=address,
+                                         jobs=jobs)
         console.print(
             f"[yellow]interrupted ({stopped_by.name}):[/yellow] {len(pending)} runs did not run; "
-            f"summary.json is marked partial. Resume with:\n  {shlex.join(again)}"
+            f"summary.json is marked partial. Resume with:\n  {again}"
         )
         raise typer.Exit(code=128 + stopped_by.value)
     if failed:

@@ -11,6 +11,7 @@ code 2.
 from __future__ import annotations
 
 import os
+import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -124,3 +125,23 @@ def campaign_input(
     manifest = {"campaign": plan.model_dump(mode="json"), "shard": f"{k}/{n}"}
     prepare_output(out, manifest, overwrite=overwrite, resume=resume)
     return CampaignInput(plan, specs, k, n, "ray" if engine == "ray" else "pool")
+
+
+def resume_command(
+    file: Path, out: Path, *, shard: str, engine: str, address: str | None, jobs: int | None
+) -> str:
+    """The ``mufusion campaign`` command line that resumes an interrupted campaign (the options
+    that identify it; defaults left out), quoted for a POSIX shell.
+
+    Examples
+    --------
+    >>> resume_command(Path("c.toml"), Path("my out"), shard="0/1", engine="ray", address=None,
+    ...                jobs=2)
+    "mufusion campaign c.toml --out 'my out' --resume --engine ray --jobs 2"
+    """
+    again = ["mufusion", "campaign", str(file), "--out", str(out), "--resume"]
+    again += [] if shard == "0/1" else ["--shard", shard]
+    again += [] if engine == "pool" else ["--engine", engine]
+    again += [] if address is None else ["--address", address]
+    again += [] if jobs is None else ["--jobs", str(jobs)]
+    return shlex.join(again)

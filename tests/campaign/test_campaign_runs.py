@@ -10,6 +10,7 @@ import signal
 import struct
 import subprocess
 import time
+from pathlib import Path
 
 import pytest
 
@@ -107,22 +108,31 @@ def test_run_campaign_returns_triples_and_raises_naming_failed_runs(tmp_path, mo
         run_campaign([specs[0], specs[0]], tmp_path / "c", jobs=1)
 
 
-@pytest.mark.slow
-def test_sigint_to_the_command_stops_it_with_a_partial_summary(tmp_path):
-    # Enough runs that the campaign cannot finish between the first published run and the
-    # signal, even on a fast machine (about 0.2 s per run on two cores here).
+def _long_campaign(tmp_path) -> Path:
+    """200 runs: more than can finish between the first published run and a signal, even on a
+    fast machine (about 0.2 s per run on two cores here)."""
     file = tmp_path / "c.toml"
     file.write_text('scenarios = ["popup"]\nconfigs = ["GT", "F"]\nseeds = 100\n'
                     'overrides = ["duration_s=1.5", "estimation.local_error=random"]\n')
+    return file
+
+
+def _wait_for_a_published_run(proc: subprocess.Popen, out: Path) -> None:
+    deadline = time.monotonic() + 120.0
+    while time.monotonic() < deadline and proc.poll() is None:
+        if (out / "runs").is_dir() and any(not p.name.startswith(".") for p in
+                                           (out / "runs").iterdir()):
+            return
+        time.sleep(0.05)
+
+
+@pytest.mark.slow
+def test_sigint_to_the_command_stops_it_with_a_partial_summary(tmp_path):
     out = tmp_path / "out"
-    cmd = mufusion_command("campaign", str(file), "--out", str(out), "--jobs", "2")
+    cmd = mufusion_command("campaign", str(_long_campaign(tmp_path)), "--out", str(out),
+                           "--jobs", "2")
     with isolated(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
-        deadline = time.monotonic() + 120.0
-        while time.monotonic() < deadline and proc.poll() is None:
-            if (out / "runs").is_dir() and any(not p.name.startswith(".") for p in
-                                               (out / "runs").iterdir()):
-                break
-            time.sleep(0.05)
+        _wait_for_a_published_run(proc, out)
         proc.send_signal(signal.SIGINT)
         output, _ = proc.communicate(timeout=60)
         assert proc.returncode == 130, output
@@ -152,18 +162,11 @@ def test_sigterm_in_the_parent_interrupts_like_ctrl_c_and_the_handler_is_restore
 def test_sigterm_to_the_process_group_leaves_a_partial_summary_and_the_resume_command(tmp_path):
     # A cluster scheduler preempting the job signals every process of it: the command, its pool
     # workers. The workers must not die as failed runs; the command writes the summary.
-    file = tmp_path / "c.toml"
-    file.write_text('scenarios = ["popup"]\nconfigs = ["GT", "F"]\nseeds = 100\n'
-                    'overrides = ["duration_s=1.5", "estimation.local_error=random"]\n')
     out = tmp_path / "out"
-    cmd = mufusion_command("campaign", str(file), "--out", str(out), "--jobs", "2")
+    cmd = mufusion_command("campaign", str(_long_campaign(tmp_path)), "--out", str(out),
+                           "--jobs", "2")
     with isolated(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
-        deadline = time.monotonic() + 120.0
-        while time.monotonic() < deadline and proc.poll() is None:
-            if (out / "runs").is_dir() and any(not p.name.startswith(".") for p in
-                                               (out / "runs").iterdir()):
-                break
-            time.sleep(0.05)
+        _wait_for_a_published_run(proc, out)
         signalled = time.monotonic()
         os.killpg(proc.pid, signal.SIGTERM)
         output, _ = proc.communicate(timeout=60)
