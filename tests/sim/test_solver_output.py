@@ -24,3 +24,14 @@ def test_nothing_printed_gives_no_lines() -> None:
     with captured_output() as lines:
         pass
     assert lines == []
+
+
+def test_a_capture_inside_another_leaves_the_lines_to_the_outer_one(capfd) -> None:
+    with captured_output() as outer:
+        with captured_output() as inner:
+            _LIBC.printf(b"message\n")
+        _LIBC.printf(b"later\n")
+    assert inner == [] and outer == ["message", "later"]
+    _LIBC.printf(b"after\n")
+    _LIBC.fflush(None)
+    assert capfd.readouterr().out == "after\n"

@@ -16,9 +16,14 @@ import ctypes
 import os
 import sys
 import tempfile
+import threading
 from collections.abc import Iterator
 
 _LIBC = ctypes.CDLL(None)
+# Descriptors a capture holds now. Restoring is only right last-in-first-out: a second capture of
+# the same descriptor while one is active (another thread's run) captures nothing instead.
+_HELD: set[int] = set()
+_HELD_LOCK = threading.Lock()
 
 
 def _flush_all() -> None:
@@ -37,7 +42,8 @@ def captured_output(fd: int = 1) -> Iterator[list[str]]:
 
     Yields a list that, once the block ends, holds the non-blank lines written meanwhile (C
     ``printf`` and Python ``print`` alike), undecodable bytes replaced. Where ``fd`` cannot be
-    duplicated (closed), nothing is captured and the list stays empty.
+    duplicated (closed), or another capture of it is active (in this or another thread; it gets
+    the lines), nothing is captured and the list stays empty.
 
     Examples
     --------
@@ -47,6 +53,20 @@ def captured_output(fd: int = 1) -> Iterator[list[str]]:
     ['SQP_RTI: QP solver returned error status 3 QP iteration 7.']
     """
     lines: list[str] = []
+    with _HELD_LOCK:
+        held = fd in _HELD
+        _HELD.add(fd)
+    if held:
+        yield lines
+        return
+    try:
+        yield from _redirected(fd, lines)
+    finally:
+        with _HELD_LOCK:
+            _HELD.discard(fd)
+
+
+def _redirected(fd: int, lines: list[str]) -> Iterator[list[str]]:
     _flush_all()
     try:
         saved = os.dup(fd)
