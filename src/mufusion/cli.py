@@ -18,8 +18,6 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from mufusion import cli_input
-
 app = typer.Typer(
     name="mufusion",
     help=(
@@ -76,7 +74,8 @@ def run(
 
     The exit code is 0 when the run completes, also when the vehicle crashes: that is a result.
     """
-    try:  # before the heavy imports below: bad input is refused at once
+    from mufusion import cli_input  # the light checks; the heavy stack after them
+    try:
         cfg = cli_input.run_input(scenario, config, list(set_ or []), out)
     except ValueError as err:
         _fail(str(err))
@@ -114,6 +113,7 @@ def reproduce(
     ] = False,
 ) -> None:
     """Reproduce the paper: every configuration in both scenarios, figures and a report."""
+    from mufusion import cli_input  # the light checks; the heavy stack after them
     try:
         cli_input.check_jobs(jobs)
         cli_input.check_out_dir(out)
@@ -183,7 +183,8 @@ def campaign(
     are rows with their error); 2: invalid input; 130 / 143: interrupted by Ctrl-C (SIGINT) /
     SIGTERM (summary marked partial, the resume command printed).
     """
-    try:  # before the heavy imports below: bad input is refused at once
+    from mufusion import cli_input  # the light checks; the heavy stack after them
+    try:
         checked = cli_input.campaign_input(file, out, jobs=jobs, shard=shard, engine=engine,
                                            address=address, resume=resume, overwrite=overwrite)
     except ValueError as err:
@@ -392,7 +393,6 @@ def _progress() -> Progress:
 
 def _print_table(rows: list[dict]) -> None:
     from mufusion.cli_table import print_outcome_table
-
     print_outcome_table(rows, Console())
 
 
