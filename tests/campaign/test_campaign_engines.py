@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from mufusion.campaign.engines import check_reachable, dispatch
+from mufusion.campaign.engines import RAY_INIT_TIMEOUT_S, check_reachable, dispatch
 from mufusion.campaign.stats import WALL_CLOCK_SUFFIX
 from mufusion.sim.log import STAMPS_KEY
 from processes import isolated, mufusion_command, wait_until_session_empty
@@ -133,3 +133,22 @@ def test_a_ray_address_where_nothing_answers_fails_in_bounded_time_naming_it(tmp
     assert time.monotonic() - started < 30.0, output
     assert proc.returncode == 2, output
     assert "no Ray cluster answers at '127.0.0.1:9'" in " ".join(output.split())
+
+
+@pytest.mark.slow
+def test_an_address_that_accepts_connections_but_is_no_cluster_fails_in_bounded_time(tmp_path):
+    # Something listens there (and Ray rewrites a loopback address to the node's own, where
+    # nothing does): ray.init alone retried for minutes.
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen()
+        address = f"127.0.0.1:{server.getsockname()[1]}"
+        cmd = mufusion_command("campaign", str(_campaign(tmp_path, seeds=2)), "--out",
+                               str(tmp_path / "out"), "--engine", "ray", "--address", address)
+        started = time.monotonic()
+        with isolated(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
+            output, _ = proc.communicate(timeout=90)
+        elapsed = time.monotonic() - started
+    assert proc.returncode == 2, output
+    assert elapsed < RAY_INIT_TIMEOUT_S + 20.0, output  # the join's bound plus start-up
+    assert f"no Ray cluster answered at '{address}'" in " ".join(output.split())

@@ -42,9 +42,13 @@ from mufusion.scenarios.runner import planner_for, run_scenario
 
 _log = logging.getLogger(__name__)
 
-RAY_CONNECT_TIMEOUT_S = 10.0
+RAY_CONNECT_TIMEOUT_S = 5.0
 """How long a Ray cluster's address may take to accept a connection before the campaign gives
 up on it [s] (``ray.init`` itself retries an address where nothing answers for minutes)."""
+RAY_INIT_TIMEOUT_S = 15.0
+"""How long joining the cluster at an address that accepts connections may take [s] (a cluster
+answers in seconds; something else listening there, or an address Ray rewrites to one it cannot
+reach, kept ``ray.init`` retrying for minutes)."""
 
 
 @dataclass(frozen=True)
@@ -253,6 +257,69 @@ def check_reachable(address: str, timeout_s: float = RAY_CONNECT_TIMEOUT_S) -> N
         ) from None
 
 
+def _init_ray(ray: Any, address: str | None, num_cpus: int | None) -> None:
+    """``ray.init``, bounded in time when joining a cluster at ``address``; this process's
+    SIGTERM handler is left as it was (Ray's would end the process without the campaign's
+    partial summary).
+
+    Raises
+    ------
+    ValueError
+        If the cluster at ``address`` was not joined within :data:`RAY_INIT_TIMEOUT_S`.
+    """
+    previous = signal.getsignal(signal.SIGTERM)
+
+    def init() -> None:
+        ray.init(address=address, num_cpus=num_cpus, include_dashboard=False,
+                 logging_level=logging.WARNING)
+
+    try:
+        if address is None:
+            init()
+            return
+        # In a thread, which the command can leave behind: ray.init has no timeout of its own.
+        # Outside the main thread Ray sets no SIGTERM handler and says so; that note is dropped.
+        quiet = _DropMessage("SIGTERM handler is not set")
+        logging.getLogger("ray._private.worker").addFilter(quiet)
+        failure: list[BaseException] = []
+        joining = threading.Thread(target=_capture_failure(init, failure), daemon=True)
+        joining.start()
+        joining.join(RAY_INIT_TIMEOUT_S)
+        logging.getLogger("ray._private.worker").removeFilter(quiet)
+        if joining.is_alive():
+            raise ValueError(
+                f"no Ray cluster answered at {address!r} within {RAY_INIT_TIMEOUT_S:g} s "
+                "(something accepts connections there, but it did not let this process join); "
+                "check --address and that the cluster is up"
+            )
+        if failure:
+            raise failure[0]
+    finally:
+        if threading.current_thread() is threading.main_thread() and previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _capture_failure(call: Callable[[], None], failure: list[BaseException]) -> Callable[[], None]:
+    def run() -> None:
+        try:
+            call()
+        except BaseException as exc:  # handed to the waiting thread
+            failure.append(exc)
+
+    return run
+
+
+class _DropMessage(logging.Filter):
+    """Drops the log records whose message starts with ``start``."""
+
+    def __init__(self, start: str) -> None:
+        super().__init__()
+        self.start = start
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not record.getMessage().startswith(self.start)
+
+
 def _dispatch_ray(
     specs: Sequence[RunSpec],
     handle: Callable[[RunPayload], None],
@@ -273,12 +340,7 @@ def _dispatch_ray(
         if address is None:
             warm_up_solvers(specs)  # the local workers share this machine's solver cache
         try:
-            ray.init(
-                address=address,
-                num_cpus=None if address else (jobs or os.cpu_count() or 1),
-                include_dashboard=False,
-                logging_level=logging.WARNING,
-            )
+            _init_ray(ray, address, None if address else (jobs or os.cpu_count() or 1))
         except (ConnectionError, RuntimeError, ValueError) as err:
             raise ValueError(f"cannot start or reach Ray (address={address!r}): {err}") from None
     task = ray.remote(num_cpus=1, max_retries=0)(_ray_task)
