@@ -143,7 +143,8 @@ def run_scenario(
         )
     )
     plant = Plant(params, initial_state(params, x0_x, x0_y, x0_psi, cfg.initial_speed_mps),
-                  dt_s=1.0 / rates.plant_hz, surface_tires=cfg.sim.surface_tires())
+                  dt_s=1.0 / rates.plant_hz, surface_tires=cfg.sim.surface_tires(),
+                  slip_control=cfg.sim.slip_control())
     loop = ClosedLoop(
         world=world,
         params=params,

@@ -208,7 +208,11 @@ class ClosedLoop:
 
             if control_tick:
                 assert estimate is not None  # a planning step comes first (i = 0)
-                command = self._command(t, xf, x_plant, plan, estimate)
+                # While the vehicle's slip control modulates a torque, the applied torque falls
+                # short of the command on purpose: the controller's lag feedback must not wind up.
+                slip = None if last is None else last.slip_control
+                modulated = slip is not None and (slip.front.active or slip.rear.active)
+                command = self._command(t, xf, x_plant, plan, estimate, modulated)
                 status = self._recorder.tick(
                     t, x_plant, xf, command, estimate.local_available, last, self._control_mode()
                 )
@@ -524,14 +528,15 @@ class ClosedLoop:
         x_plant: np.ndarray,
         plan: Plan | None,
         estimate: FrictionEstimate,
+        slip_modulated: bool = False,
     ) -> ActuatorCommand:
         curvature = self.world.curvature_at(float(xf[State.s]))
         if plan is not None and not (self._minimal_risk and not self._planner_usable):
             try:
                 command = self.controller.command(
                     t, xf, float(x_plant[PlantState.STEER]), plan, curvature,
-                    (float(x_plant[PlantState.TORQUE_FRONT]),
-                     float(x_plant[PlantState.TORQUE_REAR])),
+                    None if slip_modulated else (float(x_plant[PlantState.TORQUE_FRONT]),
+                                                 float(x_plant[PlantState.TORQUE_REAR])),
                 ).clipped(self.params)
                 return self._probe_command(t, xf, command)
             except Exception as exc:

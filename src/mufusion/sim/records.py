@@ -24,6 +24,7 @@ Tables (one record type each):
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -80,6 +81,19 @@ class Tick:
     opposing_depth_m: float
     road_margin_m: float
     off_road: bool
+    # The wheels and the vehicle's wheel-slip control (ABS, TCS) in the plant step that ended at
+    # this tick (NaN / false / 0 before the first step and without slip control).
+    wheel_slip_front: float = math.nan
+    """Longitudinal slip ratio of the front wheels [-] (−1: locked)."""
+    wheel_slip_rear: float = math.nan
+    slip_control_front: bool = False
+    """Whether the slip controller modulated the front torque (ABS or TCS in any phase but pass)."""
+    slip_control_rear: bool = False
+    slip_torque_removed_front_nm: float = 0.0
+    """Torque the slip controller withheld from the front command [N m], ≥ 0."""
+    slip_torque_removed_rear_nm: float = 0.0
+    slip_cycles: int = 0
+    """Slip-control cycles (releases) started so far, both axles."""
 
 
 @dataclass(frozen=True)
