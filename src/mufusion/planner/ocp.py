@@ -225,10 +225,6 @@ MU_MIN = 0.05
 MU_MAX = 2.0
 
 
-_SWEEP_FRACTIONS = np.linspace(0.0, 1.0, 6)
-"""Where a stage's μ̂ is looked up along the stretch its axles cover (fractions of it): the
-friction estimate's grid is 1 m, the stretch 2–6 m at the speeds planned."""
-
 MIN_LOAD_SHARE = 0.05
 """Floor of an axle's normal load in the polygons, as a share of the weight."""
 
@@ -280,28 +276,13 @@ def stage_parameters(
     ``stiffness_table``: ``None`` keeps the rear stiffness of the vehicle's tire; a table makes
     it follow each stage's μ̂ (``PlannerConfig.stiffness = "from_mu_hat"``).
 
-    ``mu_hat`` is the lowest estimate the axles meet during each stage (from the rear axle at
-    its start to the front axle at its end and one torque lag beyond). Returns arrays of length N: ``mu_hat``, ``fzf``, ``fzr``, ``radius_front``,
-    ``radius_rear``, ``rear_stiffness``, ``curvature`` and the stacked ``p`` of shape
-    ``(N, N_PARAMS)``.
+    Returns arrays of length N: ``mu_hat``, ``fzf``, ``fzr``, ``radius_front``, ``radius_rear``,
+    ``rear_stiffness``, ``curvature`` and the stacked ``p`` of shape ``(N, N_PARAMS)``.
     """
     s_k = guess_states[:-1, State.s]
     fzf, fzr = axle_loads_n(guess_inputs, params)
-    # Each stage's μ̂ is the lowest the axles meet while its forces act: from the rear axle at
-    # the stage's start to the front axle at its end, plus the distance covered in one torque
-    # lag (the wheels still apply the stage's torque then). Where the friction drops, the front
-    # axle reaches it l_f before the CoG and within a stage; a polygon at the CoG's μ̂ at the
-    # stage's start planned the high friction's braking force onto a front axle already on the
-    # low one, and its wheels locked (docs/decisions/0052). The CoG's own μ̂ is evaluated last:
-    # its count of sanitised values is the one the plan reports.
-    reach = (guess_states[1:, State.s] - s_k + params.cog_to_front_axle_m
-             + np.maximum(guess_states[:-1, State.vx], 0.0) * params.torque_time_constant_s)
-    swept = s_k - params.cog_to_rear_axle_m + _SWEEP_FRACTIONS[:, None] * (
-        reach + params.cog_to_rear_axle_m)
-    under_axles = np.asarray(mu_hat_of_s(swept), dtype=float).min(axis=0)
-    lowest = np.minimum(np.asarray(mu_hat_of_s(s_k), dtype=float), under_axles)
     # np.minimum(np.maximum(...)): np.clip's values (non-zero bounds) at less overhead.
-    mu = np.minimum(np.maximum(lowest, MU_MIN), MU_MAX)
+    mu = np.minimum(np.maximum(np.asarray(mu_hat_of_s(s_k), dtype=float), MU_MIN), MU_MAX)
     kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
     c_r = rear_cornering_stiffness_n_per_rad(
         params, fzr, utilization_factor, mu_hat=mu, table=stiffness_table
