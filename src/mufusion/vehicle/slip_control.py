@@ -76,9 +76,13 @@ class SlipControlSettings:
         Slip below which a released wheel has spun up again [-], in (0, onset_slip].
     max_hold_s
         Longest hold before the torque builds up again [s], > 0.
+    reapply_fraction
+        Share of the torque at which the wheel began to lock that the build-up starts from
+        (or the held torque, if higher) [-], in (0, 1].
     reapply_time_s
-        Time over which the torque builds from the held value to the torque at which the wheel
-        began to lock [s], > 0; it keeps rising at that rate beyond it.
+        Time in which the torque then builds by the torque at which the wheel began to lock
+        [s], > 0; it keeps rising at that rate until the command is reached or the wheel runs
+        away again.
     min_speed_mps
         Below this reference speed the controller passes the command through (the brakes hold a
         stopped vehicle) [m/s], ≥ 0.
@@ -86,12 +90,13 @@ class SlipControlSettings:
 
     abs_enabled: bool = True
     tcs_enabled: bool = True
-    onset_slip: float = 0.05
-    release_slip: float = 0.2
+    onset_slip: float = 0.12
+    release_slip: float = 0.25
     wheel_accel_margin_mps2: float = 10.0
-    recovered_slip: float = 0.03
+    recovered_slip: float = 0.05
     max_hold_s: float = 0.3
-    reapply_time_s: float = 0.15
+    reapply_fraction: float = 0.7
+    reapply_time_s: float = 0.3
     min_speed_mps: float = 2.0
 
     def __post_init__(self) -> None:
@@ -114,6 +119,9 @@ class SlipControlSettings:
             raise ValueError(
                 f"recovered_slip must be in (0, onset_slip = {self.onset_slip}], "
                 f"got {self.recovered_slip!r}")
+        if not 0.0 < self.reapply_fraction <= 1.0:
+            raise ValueError(
+                f"reapply_fraction must be in (0, 1], got {self.reapply_fraction!r}")
         for name in ("wheel_accel_margin_mps2", "max_hold_s", "reapply_time_s"):
             if not getattr(self, name) > 0.0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
@@ -197,7 +205,10 @@ class _AxleMachine:
             return self._release(t, applied)
         if phase is SlipPhase.PASS:
             return asked
-        cap = self.held + (t - self.since) * self.lock / cfg.reapply_time_s
+        # Straight back to a share of the torque that locked the wheel (the peak lies below it,
+        # not far), then slowly on towards and past it.
+        start = max(self.held, cfg.reapply_fraction * self.lock)
+        cap = start + (t - self.since) * self.lock / cfg.reapply_time_s
         if cap >= asked:
             self.phase = SlipPhase.PASS
             return asked
