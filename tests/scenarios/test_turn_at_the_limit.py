@@ -121,7 +121,7 @@ def test_a_vehicle_whose_rear_slides_keeps_its_plans() -> None:
     # linear rear tire far outside the rear polygon. The solution check used to judge that
     # stage too and rejected every plan of the sliding car: five in a row, the minimal-risk
     # stop, a spin and 1.05 m out of the lane (with the plans' front force started from the
-    # realised one, docs/experiments.md).
+    # realised one, docs/decisions/0050).
     cfg = load_scenario("turn", overrides=[
         "initial_speed_mps=14", "friction.mu_turn=0.2", "turn.start_ahead_m=40",
         "turn.direction=left", "turn.clothoid_m=0", "vehicle=car",

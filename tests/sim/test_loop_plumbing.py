@@ -129,7 +129,7 @@ def test_utilization_reaches_the_estimator() -> None:
 
 
 def test_each_plan_is_given_the_front_force_the_tires_deliver() -> None:
-    # The plans' front-force state starts from the realised force (docs/experiments.md, "A check
+    # The plans' front-force state starts from the realised force (docs/decisions/0051, "A check
     # that judges the solver"): the planner gets the front axle's body-frame force of the plant
     # step that ends at its tick, none before the clock starts or at t = 0.
     loop, planner, _, _ = _loop(steer_rad=0.05)

@@ -162,7 +162,7 @@ ROBUST_HPIPM_MODE = "BALANCE"
 of the interior-point iteration and at the handling limit returns NaN (acados status 4) on
 QPs that ``BALANCE`` solves: on the published turn grid it failed 173 planning steps of GT in
 variants the oracle calls feasible, and five failures in a row stopped the truck before the
-curve (docs/experiments.md, "A QP that fails at the limit")."""
+curve (docs/decisions/0019, "A QP that fails at the limit")."""
 
 
 def problem_hash(params: VehicleParams, config: PlannerConfig,

@@ -152,7 +152,7 @@ class PlannerSettings(_Strict):
     """Share of the friction the speed reference's braking ramps before a curve or a lower μ̂
     assume: 1 brakes as late as the friction polygon allows, less starts earlier and keeps the
     rest as a reserve (the curves' limit speeds are unchanged). The default 0.8 keeps a fifth
-    of it for the braking that plans lose while they turn in (docs/experiments.md, "A braking
+    of it for the braking that plans lose while they turn in (docs/decisions/0031, "A braking
     reserve in the speed reference")."""
     reference_regain_limit: bool = PlannerConfig.reference_regain_limit
     """In cruise, the speed reference regains speed from the vehicle's own no faster than the
