@@ -70,7 +70,9 @@ def run(
             "--config",
             "-c",
             help="Friction estimate the planner uses: GT (ground truth), L (local only), "
-            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe).",
+            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe), or your "
+            "own as module:Class (imported from the current directory) or an entry point of "
+            "mufusion.friction_sources.",
         ),
     ] = "F",
     set_: Annotated[
@@ -86,14 +88,16 @@ def run(
 
     The exit code is 0 when the run completes, also when the vehicle crashes: that is a result.
     """
-    from mufusion.configurations import CONFIGURATION_NAMES
+    from mufusion.configurations.plugins import check_friction_spec
     from mufusion.metrics import compute_metrics
     from mufusion.plots.run_figures import single_run_figures
     from mufusion.scenarios import load_scenario
     from mufusion.scenarios.runner import run_scenario
 
-    if config not in CONFIGURATION_NAMES:
-        _fail(f"--config must be one of {', '.join(CONFIGURATION_NAMES)}, got {config!r}")
+    try:
+        check_friction_spec(config)
+    except ValueError as err:
+        _fail(f"--config: {err}")
     try:
         cfg = load_scenario(scenario, list(set_ or []))
     except ValueError as err:

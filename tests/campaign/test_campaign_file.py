@@ -57,7 +57,7 @@ def test_shards_partition_the_campaign_and_keep_each_variant_whole(tmp_path, sha
 @pytest.mark.parametrize(
     ("text", "match"),
     [
-        ('scenarios = ["popup"]\nconfigs = ["Q"]', "unknown configs"),
+        ('scenarios = ["popup"]\nconfigs = ["Q"]', "configs: 'Q' is neither a built-in"),
         ('scenarios = []', "scenarios"),
         ('scenarios = ["popup"]\n[grid]\n"friction.mu" = []', "no values"),
         ('scenarios = ["popup"]\ncolour = "red"', "colour"),

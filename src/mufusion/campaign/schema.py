@@ -14,6 +14,7 @@ from typing import Annotated
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from mufusion.configurations import CONFIGURATION_NAMES
+from mufusion.configurations.plugins import check_friction_spec
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -33,7 +34,7 @@ class CampaignFile(BaseModel):
 
         name = "friction sweep"
         scenarios = ["popup"]
-        configs = ["GT", "P", "F", "F-safe"]
+        configs = ["GT", "P", "F", "F-safe"]  # or a plug-in: "mypkg.estimators:SlipRLS"
         overrides = ["duration_s=4"]          # applied to every run
         seeds = 20                            # optional: every variant with 20 seeds
         [grid]                                # every combination becomes one variant
@@ -63,9 +64,11 @@ class CampaignFile(BaseModel):
     @field_validator("configs")
     @classmethod
     def _known_configs(cls, v: list[str]) -> list[str]:
-        unknown = [c for c in v if c not in CONFIGURATION_NAMES]
-        if unknown:
-            raise ValueError(f"unknown configs {unknown}; allowed: {list(CONFIGURATION_NAMES)}")
+        for config in v:
+            try:
+                check_friction_spec(config)
+            except ValueError as err:
+                raise ValueError(f"configs: {err}") from None
         _reject_repeats("configs", v)
         return v
 
