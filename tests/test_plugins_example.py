@@ -11,11 +11,11 @@ import json
 import os
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import pandas as pd
 import pytest
+import tomllib
 
 import mufusion
 
@@ -85,3 +85,32 @@ def test_the_campaign_report_has_a_row_for_the_plugin(campaign: Path) -> None:
     report = (campaign / "report" / "report.md").read_text()
     for config in ("GT", "L", "P", "F", SPEC):
         assert any(line.startswith(f"| {config} ") for line in report.splitlines()), config
+
+
+def test_the_readme_estimator_runs_on_the_sensor_frame(tmp_path: Path) -> None:
+    import importlib.util
+    import re
+
+    import numpy as np
+
+    from mufusion.configurations import step_source
+    from mufusion.estimators import SensorModel
+
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("## Your own estimator"):readme.index("## Documentation")]
+    (code,) = re.findall(r"```python\n(.*?)```", section, re.S)
+    assert len(code.splitlines()) <= 30
+    path = tmp_path / "readme_estimators.py"
+    path.write_text(code)
+    spec = importlib.util.spec_from_file_location("readme_estimators", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    grid = np.arange(0.0, 61.0, 1.0)
+    mu = np.where(grid < 30.0, 0.8, 0.4)
+    estimate = step_source(module.CameraFloor(), SensorModel(), grid, mu, 0.7)
+    # Measured under the vehicle (0.8 − 0.025 there), the class minima ahead (0.6 then 0.4),
+    # the lowest class minimum seen beyond the camera's 50 m.
+    assert estimate.mu_hat[0] == pytest.approx(0.775)
+    assert estimate.mu_hat[10] == pytest.approx(0.6) and estimate.mu_hat[40] == pytest.approx(0.4)
+    assert estimate.mu_hat[-1] == pytest.approx(0.4)
