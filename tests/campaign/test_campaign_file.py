@@ -58,6 +58,12 @@ def test_shards_partition_the_campaign_and_keep_each_variant_whole(tmp_path, sha
     ("text", "match"),
     [
         ('scenarios = ["popup"]\nconfigs = ["Q"]', "configs: 'Q' is neither a built-in"),
+        ('scenarios = ["popup"]\nconfigs = ["no_such_mod:S"]',
+         "configs: plug-in 'no_such_mod:S': module 'no_such_mod' failed to import"),
+        ('scenarios = ["popup"]\nplanner = "no_such_mod:P"',
+         "planner.*plug-in 'no_such_mod:P': module 'no_such_mod' failed to import"),
+        ('scenarios = ["popup"]\ncontroller = "json:JSONDecoder"',
+         "controller.*is not a controller"),
         ('scenarios = []', "scenarios"),
         ('scenarios = ["popup"]\n[grid]\n"friction.mu" = []', "no values"),
         ('scenarios = ["popup"]\ncolour = "red"', "colour"),

@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 
 from mufusion.configurations import FrictionEstimator
+from mufusion.configurations.plugins import PluginError
 from mufusion.estimators import SensorFrame, VehicleSignals
+from mufusion.planner import TrackingController
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import WARMUP_PLANNING_STEPS, build_loop
 
@@ -73,3 +75,35 @@ def test_a_source_of_your_own_may_not_take_a_builtin_label(scenario) -> None:
 
     with pytest.raises(ValueError, match="labelled 'F', a built-in configuration's name"):
         build_loop(scenario, friction=Impostor())
+
+
+class CountingController(TrackingController):
+    """The package's controller, counting its commands (a controller plug-in)."""
+
+    commands = 0
+
+    def command(self, *args, **kwargs):
+        type(self).commands += 1
+        return super().command(*args, **kwargs)
+
+
+class NotAPlanner:
+    def step(self, *args, **kwargs):
+        return None
+
+
+def test_a_controller_plugin_named_by_import_path_drives_and_is_recorded(scenario) -> None:
+    spec = f"{__name__}:CountingController"
+    CountingController.commands = 0
+    loop = build_loop(scenario, friction="GT", controller=spec)
+    log = loop.run(DURATION_S, warmup_steps=WARMUP_PLANNING_STEPS)
+    assert isinstance(loop.controller, CountingController)
+    assert CountingController.commands == len(log.timeseries)
+    assert log.meta.controller_plugin == spec and log.meta.planner_plugin is None
+
+
+def test_a_planner_plugin_without_its_protocol_is_refused_naming_it(scenario) -> None:
+    spec = f"{__name__}:NotAPlanner"
+    with pytest.raises(PluginError, match=f"'{spec}' is not a planner: NotAPlanner has no "
+                                          "callable restore"):
+        build_loop(scenario, planner=spec)

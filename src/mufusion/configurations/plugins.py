@@ -116,7 +116,8 @@ def _instantiate(spec: str, obj: Any, *args: Any) -> Any:
 def _require(spec: str, obj: Any, what: str, calls: tuple[str, ...]) -> None:
     missing = [c for c in calls if not callable(getattr(obj, c, None))]
     if missing:
-        raise PluginError(f"plug-in {spec!r} is not a {what}: {type(obj).__name__} has no "
+        name = obj.__name__ if inspect.isclass(obj) else type(obj).__name__
+        raise PluginError(f"plug-in {spec!r} is not a {what}: {name} has no "
                           f"callable {', '.join(missing)}")
 
 
@@ -177,6 +178,35 @@ def check_friction_spec(spec: str) -> str:
     return spec
 
 
+_PROTOCOLS: dict[str, tuple[str, tuple[str, ...]]] = {
+    PLANNERS: ("planner", ("step", "restore")),
+    CONTROLLERS: ("controller", ("command",)),
+}
+
+
+def check_component_spec(spec: str, group: str) -> str:
+    """Check a planner (``group=PLANNERS``) or controller (``CONTROLLERS``) plug-in before any
+    run: it loads, and a class or object has the calls of its protocol (a factory function is
+    checked when called, at the start of a run).
+
+    Returns
+    -------
+    str
+        ``spec`` itself.
+
+    Raises
+    ------
+    PluginError
+        Naming the plug-in, as :func:`load_plugin`, or if a call is missing.
+    """
+    import_from_cwd()
+    obj = load_plugin(spec, group)
+    if not inspect.isfunction(obj):
+        what, calls = _PROTOCOLS[group]
+        _require(spec, obj, what, calls)
+    return spec
+
+
 def make_component_plugin(spec: str, group: str, *args: Any) -> Any:
     """A planner (``group=PLANNERS``) or controller (``CONTROLLERS``) from the plug-in ``spec``,
     its factory called with ``args`` (the vehicle's parameters and the planner's configuration).
@@ -187,10 +217,29 @@ def make_component_plugin(spec: str, group: str, *args: Any) -> Any:
         If it cannot be loaded or made, or lacks a call of its protocol (a planner: ``step``,
         ``restore``; a controller: ``command``).
     """
-    import_from_cwd()
+    check_component_spec(spec, group)  # a class lacking a call is refused before it is made
     component = _instantiate(spec, load_plugin(spec, group), *args)
-    if group == PLANNERS:
-        _require(spec, component, "planner", ("step", "restore"))
-    else:
-        _require(spec, component, "controller", ("command",))
+    _require(spec, component, *_PROTOCOLS[group])
     return component
+
+
+def check_plugins(
+    *, config: str | None = None, planner: str | None = None, controller: str | None = None
+) -> None:
+    """Check the friction source, planner and controller a command names, before any run.
+
+    Raises
+    ------
+    PluginError
+        Prefixed with the option that names the unusable plug-in (``--config``, ``--planner``,
+        ``--controller``).
+    """
+    checks = [("--config", config, check_friction_spec),
+              ("--planner", planner, lambda s: check_component_spec(s, PLANNERS)),
+              ("--controller", controller, lambda s: check_component_spec(s, CONTROLLERS))]
+    for option, spec, check in checks:
+        if spec is not None:
+            try:
+                check(spec)
+            except PluginError as err:
+                raise PluginError(f"{option}: {err}") from None

@@ -202,8 +202,17 @@ def build_loop(
             polygon_sides=config.polygon_sides, margin_m=config.obstacle_margin_m,
             planning_period_s=1.0 / rates.planner_hz,
         ),
-        meta=run_meta(cfg, label, params, road, config),
+        meta=run_meta(cfg, label, params, road, config).model_copy(update={
+            "planner_plugin": _component_name(planner),
+            "controller_plugin": _component_name(controller),
+        }),
     )
+
+
+def _component_name(component: object) -> str | None:
+    if component is None or isinstance(component, str):
+        return component
+    return type(component).__name__
 
 
 def _friction_source(
@@ -230,6 +239,8 @@ def run_scenario(
     configuration: Configuration | str | FrictionSource,
     *,
     progress: Callable[[float], None] | None = None,
+    planner: str | Planner | None = None,
+    controller: str | Controller | None = None,
 ) -> RunLog:
     """Run one scenario with one friction source and return its log (:func:`build_loop`).
 
@@ -242,17 +253,21 @@ def run_scenario(
         plug-in's name or a friction source (see :func:`build_loop`'s ``friction``).
     progress
         Called with the simulated time after every planning step.
+    planner, controller
+        None for the package's own, else a plug-in's name or the object (see
+        :func:`build_loop`).
 
     Raises
     ------
     ValueError
-        If ``configuration`` names no configuration or usable plug-in.
+        If ``configuration`` names no configuration or usable plug-in, or a planner or
+        controller plug-in is unusable.
 
     Notes
     -----
     The run limits the BLAS thread pools (OpenBLAS of numpy and scipy) to one thread.
     """
-    loop = build_loop(cfg, friction=configuration)
+    loop = build_loop(cfg, friction=configuration, planner=planner, controller=controller)
     # One BLAS thread: the fusion's small matrix products gain nothing from a thread pool, and
     # on a busy machine its spinning threads made runs several times slower.
     with _blas_controller().limit(limits=1, user_api="blas"):

@@ -311,6 +311,10 @@ class RunMeta(_Meta):
     feasibility_margin_mps: float | None = None
     """The oracle's margin: highest entry speed at which the manoeuvre fits, minus the entry
     speed [m/s]."""
+    planner_plugin: str | None = None
+    """The planner's name if it is not the package's (a plug-in's, or the object's class)."""
+    controller_plugin: str | None = None
+    """The controller's name if it is not the package's."""
 
     @property
     def builtin(self) -> Configuration | None:
