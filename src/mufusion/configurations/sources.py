@@ -296,30 +296,14 @@ def make_configuration(
     ----------
     name : Configuration or its name {"GT", "L", "P", "F", "F-safe"}
         Configuration (paper Sec. IV-B; F-safe is F with the fusion's safe mode).
-    classes : sequence of SurfaceClass
-        Camera class table; default the paper's.
-    local_error, predictive_error : {"none", "worst_over", "worst_under", "random"}
-        Error models of the local and camera estimators (:mod:`mufusion.estimators.errors`).
-    rng : numpy.random.Generator, optional
-        Source of all randomness; required if an error model is ``"random"``.
-    initial_local_mu : float, optional
-        Held local value before the first measurement [-] (the paper's ``μ̂_0``); None: the
-        first step measures the μ under the vehicle as if the estimate had just been available.
-    length_scale_m : float, optional
-        GP kernel length scale [m]; None keeps the fusion's default prior.
-    s_local_m : float, optional
-        Reach ``s_l`` of the local estimate in the fusion input [m]; None keeps the fusion's
-        default.
-    max_local_error : float
-        Worst-case local error ``max{|e_l|}`` [-] (paper: 0.025).
-    utilization_threshold : float
-        Local estimate available iff utilization exceeds this [-] (paper: 0.5).
-    range_m : float
-        Camera range ``s_f`` [m] (paper: 50).
-    local_timing : LocalTiming
-        Sampling, buffer, axle, publishing and delay of the local estimator; default the paper's
-        (one sample per step, as ``step`` feeds it). Other timings are fed through
-        ``configuration.local.observe`` / ``update_at`` (:mod:`mufusion.estimators.timing`).
+    length_scale_m, s_local_m
+        The estimator's: see :func:`make_estimator`.
+    classes, local_error, predictive_error, rng, initial_local_mu
+        The sensors': see :func:`~mufusion.estimators.sensor_model.make_sensor_model`
+        (``classes`` is also P's class table).
+    max_local_error, utilization_threshold, range_m, local_timing
+        The sensors' as well (a local timing with its own sample rate is fed through
+        ``configuration.observe``).
 
     Returns
     -------
