@@ -52,6 +52,15 @@ def test_a_broken_plugin_fails_before_any_run_naming_it(tmp_path: Path) -> None:
     assert not (tmp_path / "run").exists()
 
 
+def test_a_campaign_naming_a_broken_plugin_fails_before_any_run(tmp_path: Path) -> None:
+    file = tmp_path / "broken.toml"
+    file.write_text('scenarios = ["popup"]\nconfigs = ["GT", "examples.plugins.nowhere:X"]\n')
+    done = _mufusion("campaign", str(file), "--out", str(tmp_path / "out"))
+    assert done.returncode == 2
+    assert "plug-in 'examples.plugins.nowhere:X'" in " ".join(done.stderr.split())
+    assert not (tmp_path / "out" / "runs").exists()
+
+
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A tiny version of compare.toml: one friction level, 0.6 s runs."""

@@ -17,7 +17,7 @@ from mufusion.configurations import (
     make_estimator,
     step_source,
 )
-from mufusion.configurations.plugins import PluginError, check_friction_spec
+from mufusion.configurations.plugins import PluginError, check_friction_spec, make_friction_plugin
 from mufusion.estimators import (
     CameraReport,
     Channel,
@@ -142,3 +142,27 @@ def make_source() -> _Recording:
 @pytest.mark.parametrize("spec", [f"{__name__}:make_source", "F-safe"])
 def test_a_usable_plugin_or_builtin_is_its_own_label(spec: str) -> None:
     assert check_friction_spec(spec) == spec
+
+
+def test_an_installed_package_names_its_source_by_an_entry_point(tmp_path, monkeypatch) -> None:
+    # A package as pip installs it: its module and a dist-info declaring the entry point.
+    (tmp_path / "my_estimators.py").write_text(
+        "import numpy as np\n"
+        "class Constant:\n"
+        "    channels = frozenset()\n"
+        "    def step(self, frame):\n"
+        "        return np.full(frame.s_ahead_m.shape, 0.3)\n"
+    )
+    info = tmp_path / "my_estimators-1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: my-estimators\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text(
+        "[mufusion.friction_sources]\nconstant = my_estimators:Constant\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert check_friction_spec("constant") == "constant"
+    source = make_friction_plugin("constant")
+    estimate = step_source(source, SensorModel(), GRID_M, np.full(GRID_M.size, 0.8), 0.0)
+    assert np.all(estimate.mu_hat == 0.3)
+    with pytest.raises(PluginError, match="'constan' is neither a built-in configuration"):
+        check_friction_spec("constan")

@@ -13,7 +13,8 @@ The attribute is the component itself or a factory (a class, a function) that ma
 source's factory is called without arguments, once per run (a source keeps state). The name is
 the run's label in logs, tables and figures; it may not be a built-in configuration's name. Modules
 are imported the way ``python -m`` does: with the current directory on the import path
-(:func:`import_from_cwd`).
+(:func:`import_from_cwd`); the campaign's process pool inherits it, a Ray cluster does not (there
+the plug-in must be installed, or on the workers' ``PYTHONPATH``).
 
 Errors (the module does not import, the attribute is missing, the factory raises, the result
 lacks the calls of its protocol) are :class:`PluginError`, a :class:`ValueError` naming the
