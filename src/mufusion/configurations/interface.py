@@ -18,7 +18,6 @@ declares :attr:`~mufusion.estimators.sensors.Channel.TRUTH` is called ``step(fra
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Collection
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol, runtime_checkable
@@ -184,7 +183,10 @@ def step_source(
             s_m=frame.s_ahead_m, mu_hat=mu_hat, local_available=frame.slip.available,
             local_mu=frame.slip.mu,
         )
-    return dataclasses.replace(estimate, s_m=frame.s_ahead_m, mu_hat=mu_hat)
+    return FrictionEstimate(
+        s_m=frame.s_ahead_m, mu_hat=mu_hat, local_available=estimate.local_available,
+        local_mu=estimate.local_mu, fused=estimate.fused, data=estimate.data,
+    )
 
 
 def _label(source: object) -> str:

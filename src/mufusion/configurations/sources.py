@@ -40,6 +40,7 @@ import numpy as np
 from mufusion.configurations.interface import (
     FrictionEstimate,
     FrictionEstimator,
+    channels_of,
     step_source,
 )
 from mufusion.configurations.registry import Configuration
@@ -231,6 +232,7 @@ class EmulatedConfiguration:
     def __init__(self, sensors: SensorModel, estimator: FrictionConfiguration) -> None:
         self.sensors = sensors
         self.estimator = estimator
+        self._channels = channels_of(estimator)
 
     @property
     def name(self) -> str:
@@ -271,7 +273,7 @@ class EmulatedConfiguration:
         :meth:`~mufusion.estimators.sensor_model.SensorModel.frame`."""
         return step_source(
             self.estimator, self.sensors, s_ahead_m, mu_true_ahead, utilization,
-            camera_ok=camera_ok, t_s=t_s,
+            camera_ok=camera_ok, t_s=t_s, channels=self._channels,
         )
 
 
