@@ -52,6 +52,15 @@ def test_a_broken_plugin_fails_before_any_run_naming_it(tmp_path: Path) -> None:
     assert not (tmp_path / "run").exists()
 
 
+def test_a_planner_plugin_without_its_calls_fails_before_any_run(tmp_path: Path) -> None:
+    done = _mufusion("run", "popup", "--planner", "json:JSONDecoder", "--out",
+                     str(tmp_path / "run"))
+    assert done.returncode == 2
+    said = " ".join(done.stderr.split())
+    assert "--planner: plug-in 'json:JSONDecoder' is not a planner" in said
+    assert not (tmp_path / "run").exists()
+
+
 def test_a_campaign_naming_a_broken_plugin_fails_before_any_run(tmp_path: Path) -> None:
     file = tmp_path / "broken.toml"
     file.write_text('scenarios = ["popup"]\nconfigs = ["GT", "examples.plugins.nowhere:X"]\n')
