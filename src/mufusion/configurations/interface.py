@@ -144,8 +144,7 @@ def step_source(
     source
         The friction source (see :class:`FrictionSource`).
     sensors
-        The sensor model that makes the frame (:meth:`SensorModel.frame`, whose parameters the
-        next four are).
+        The sensor model that makes the frame.
     s_ahead_m, mu_true_ahead, utilization, camera_ok, t_s, signals
         See :meth:`~mufusion.estimators.sensor_model.SensorModel.frame`.
     channels

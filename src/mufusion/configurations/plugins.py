@@ -9,8 +9,9 @@ campaign files (``configs = ["GT", "F", "mypkg.estimators:SlipRLS"]``) by
   ``pyproject.toml``: ``[project.entry-points."mufusion.friction_sources"] slip-rls =
   "mypkg.estimators:SlipRLS"``.
 
-The attribute is the component itself or a factory (a class, a function) that makes one: a friction
-source's factory is called without arguments, once per run (a source keeps state). The name is
+The attribute is a factory (a class, a function) or the component itself: a friction source's
+factory is called without arguments, once per run, so that each run starts from a fresh state (a
+component given as an object is shared by every run of the process). The name is
 the run's label in logs, tables and figures; it may not be a built-in configuration's name. Modules
 are imported the way ``python -m`` does: with the current directory on the import path
 (:func:`import_from_cwd`); the campaign's process pool inherits it, a Ray cluster does not (there
