@@ -7,6 +7,7 @@ import pytest
 
 from factories import run_meta
 from mufusion.configurations import FrictionEstimate
+from mufusion.estimators import Channel
 from mufusion.metrics import compute_metrics
 from mufusion.planner import Plan, PlannerObstacle
 from mufusion.road import FrictionMap, Obstacle, straight_road
@@ -52,15 +53,14 @@ class _Controller:
 
 
 class _Friction:
+    channels = frozenset({Channel.TRUTH})
+
     def __init__(self) -> None:
         self.utilizations: list[float] = []
 
-    def observe(self, t_s, utilization_front, utilization_rear, mu_front, mu_rear):
-        pass
-
-    def step(self, s_ahead_m, mu_true_ahead, utilization, *, camera_ok=True, t_s=None):
-        self.utilizations.append(utilization)
-        return FrictionEstimate(s_m=np.asarray(s_ahead_m), mu_hat=np.asarray(mu_true_ahead) - 0.1,
+    def step(self, frame, truth):
+        self.utilizations.append(frame.utilization_peak)
+        return FrictionEstimate(s_m=frame.s_ahead_m, mu_hat=truth.mu - 0.1,
                                 local_available=False, local_mu=None)
 
 
