@@ -58,7 +58,9 @@ def run(
             "--config",
             "-c",
             help="Friction estimate the planner uses: GT (ground truth), L (local only), "
-            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe).",
+            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe), or your "
+            "own as module:Class (imported from the current directory) or an entry point of "
+            "mufusion.friction_sources.",
         ),
     ] = "F",
     set_: Annotated[
@@ -69,6 +71,16 @@ def run(
         "results/run"
     ),
     gif: Annotated[bool, typer.Option(help="Also write an animated GIF of the run.")] = True,
+    planner: Annotated[
+        str | None,
+        typer.Option(help="Your own planner: module:Class (called with the vehicle's parameters "
+                     "and the planner configuration) or an entry point of mufusion.planners."),
+    ] = None,
+    controller: Annotated[
+        str | None,
+        typer.Option(help="Your own controller: module:Class or an entry point of "
+                     "mufusion.controllers (called like a planner plug-in)."),
+    ] = None,
 ) -> None:
     """Run one scenario in closed loop: writes the run log, summary.json and figures.
 
@@ -76,7 +88,7 @@ def run(
     """
     from mufusion import cli_input  # the light checks; the heavy stack after them
     try:
-        cfg = cli_input.run_input(scenario, config, list(set_ or []), out)
+        cfg = cli_input.run_input(scenario, config, list(set_ or []), out, planner, controller)
     except ValueError as err:
         _fail(str(err))
     from mufusion.metrics import compute_metrics
@@ -85,7 +97,8 @@ def run(
 
     with _progress() as progress:
         task = progress.add_task(f"{cfg.name} / {config}", total=cfg.duration_s)
-        log = run_scenario(cfg, config, progress=lambda t: progress.update(task, completed=t))
+        log = run_scenario(cfg, config, progress=lambda t: progress.update(task, completed=t),
+                           planner=planner, controller=controller)
         progress.update(task, completed=cfg.duration_s)
     log.save(out / "log")
     metrics = compute_metrics(log)

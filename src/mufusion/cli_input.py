@@ -24,7 +24,7 @@ from mufusion.campaign import (
     prepare_output,
 )
 from mufusion.campaign.schema import Engine
-from mufusion.configurations import CONFIGURATION_NAMES
+from mufusion.configurations.plugins import check_plugins
 from mufusion.scenarios import ScenarioConfig, load_scenario
 
 
@@ -47,19 +47,25 @@ def check_jobs(jobs: int | None) -> None:
         raise ValueError(f"--jobs must be >= 1, got {jobs}")
 
 
-def run_input(scenario: str, config: str, overrides: list[str], out: Path) -> ScenarioConfig:
+def run_input(
+    scenario: str,
+    config: str,
+    overrides: list[str],
+    out: Path,
+    planner: str | None = None,
+    controller: str | None = None,
+) -> ScenarioConfig:
     """The validated scenario of ``mufusion run`` (its file or name with the ``--set``
-    overrides applied), after checking ``--config`` and ``--out``.
+    overrides applied), after checking ``--config``, ``--planner``, ``--controller`` (a plug-in
+    named there is imported: :func:`mufusion.configurations.plugins.check_plugins`) and
+    ``--out``.
 
     Raises
     ------
     ValueError
-        Naming ``--config``, the scenario field or ``--out``.
+        Naming the option or the scenario field.
     """
-    if config not in CONFIGURATION_NAMES:
-        raise ValueError(
-            f"--config must be one of {', '.join(CONFIGURATION_NAMES)}, got {config!r}"
-        )
+    check_plugins(config=config, planner=planner, controller=controller)
     cfg = load_scenario(scenario, overrides)
     check_out_dir(out)
     return cfg

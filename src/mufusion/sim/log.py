@@ -13,6 +13,7 @@ existed (no ``"files"``) loads unchecked.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
@@ -215,6 +216,11 @@ def load_run(directory: str | Path) -> RunLog:
             _check_stamp(file, 0 if frame is None else len(frame), checked[file.name])
         if frame is None:
             frame = _to_frame(record_type, [])
+        # A column added to a record later, with a default, reads as that default in a log
+        # written before it existed.
+        for f in dataclasses.fields(record_type):
+            if f.name not in frame.columns and f.default is not dataclasses.MISSING:
+                frame[f.name] = f.default
         missing = [c for c in columns(record_type) if c not in frame.columns]
         if missing:
             raise ValueError(f"{str(file)!r} lacks the columns {missing} of table {table!r}")

@@ -63,7 +63,7 @@ class ProbingSettings:
     # each axle, that is 0.5 μ g of deceleration. The ceiling covers the highest friction the
     # camera's classes declare (dry, 0.8 ± 0.2: 4.9 m/s² on μ 1.0); the ramp's 10 m/s³ reaches it
     # in 0.5 s, and the probe ends at the first planning step that sees the estimate. A ceiling of
-    # 3 m/s² never measured on μ 0.9 (docs/experiments.md, "A probe that measures on dry roads").
+    # 3 m/s² never measured on μ 0.9 (docs/decisions/0045, "A probe that measures on dry roads").
     max_decel_mps2: float = 5.0
     ramp_s: float = 0.5
     max_duration_s: float = 0.8
