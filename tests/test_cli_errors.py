@@ -97,7 +97,7 @@ def _modules_after(tmp_path: Path, *args: str) -> tuple[subprocess.CompletedProc
     ("args", "fragment"),
     [
         (["run", "turn", "--set", "friction.mu_turn=7"], "friction.mu_turn"),
-        (["run", "popup", "-c", "F_safe"], "--config must be one of"),
+        (["run", "popup", "-c", "F_safe"], "'F_safe' is neither a built-in configuration"),
         (["reproduce", "--jobs", "0"], "--jobs must be >= 1"),
     ],
 )
