@@ -86,6 +86,8 @@ def classify_scenario(
             utilization_factor=lam, dead_time_s=params.torque_time_constant_s,
             lane_width_m=cfg.road.lane_width_m, vehicle_width_m=params.width_m,
             vehicle_length_m=params.length_m, max_decel_mps2=max_decel,
+            front_axle_ahead_m=params.cog_to_front_axle_m,
+            rear_axle_behind_m=params.cog_to_rear_axle_m,
         )
     ob = cfg.obstacle
     lane, half_w = cfg.road.lane_width_m, 0.5 * params.width_m
