@@ -81,7 +81,8 @@ def axle_span_friction(
     -------
     mu_of, breakpoints
         ``mu_of(s)``: the lower μ under the two axles with the centre of gravity at ``s``;
-        ``breakpoints``: where it may jump (``change − front`` and ``change + rear``).
+        ``breakpoints``: where it may jump (``change − front`` and ``change + rear``; none
+        when the two μ are equal).
 
     Examples
     --------
@@ -98,6 +99,8 @@ def axle_span_friction(
     def mu_of(s_m: float) -> float:
         return min(road(s_m + front_m), road(s_m - rear_m))
 
+    if mu_before == mu_after:
+        return mu_of, ()
     return mu_of, (change_m - front_m, change_m + rear_m)
 
 
@@ -115,10 +118,10 @@ def backward_profile(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Backward pass over a line: the nodes s [m], ``v_max²`` and the pointwise limit ``v²``.
 
-    Straights take one step (exact), curved pieces steps of :data:`PROFILE_STEP_M`; every step
-    is split at the friction's breakpoints, so μ is constant on each. A node's curvature is the
-    larger of its two steps' ends (a curvature jump counts at once) and its μ the lower of its two
-    steps'; the pass ends at the line's end at that node's limit.
+    Straights and arcs take one step (exact), clothoids steps of :data:`PROFILE_STEP_M`; every
+    step is split at the friction's breakpoints, so μ is constant on each. A node's limit is the
+    tighter of its two sides' (a curvature jump counts at once); the pass ends at the line's end
+    at that node's limit.
 
     Raises
     ------
@@ -127,22 +130,24 @@ def backward_profile(
     """
     steps = _steps(pieces, breakpoints)
     nodes = [steps[0][0]] + [step[1] for step in steps]
-    step_k = [max(step[2], step[3]) for step in steps]
-    ends = [steps[0][2], *[step[3] for step in steps]]
-    starts = [*[step[2] for step in steps], steps[-1][3]]
-    curv = [max(a, b) for a, b in zip(ends, starts, strict=True)]
-    # μ on the step (s_i, s_i+1) is its midpoint's; a node takes the lower of its two steps.
-    mu_step = [mu_of(0.5 * (step[0] + step[1])) for step in steps]
-    mu_node = [min(a, b) for a, b in zip([mu_step[0], *mu_step], [*mu_step, mu_step[-1]],
-                                         strict=True)]
-    limit = [lam * m * GRAVITY_MPS2 / k if k > 0.0 else math.inf
-             for m, k in zip(mu_node, curv, strict=True)]
+    # μ on the step (s_i, s_i+1) is its midpoint's (the breakpoints split the steps).
+    accel = [lam * mu_of(0.5 * (step[0] + step[1])) * GRAVITY_MPS2 for step in steps]
+
+    def lim(a: float, kappa: float) -> float:
+        return a / kappa if kappa > 0.0 else math.inf
+
+    # A node's limit is the tighter of its two sides, each with its own step's μ and curvature
+    # there (a curvature jump counts at once; a change of μ at a jump pairs each μ with its own
+    # side's curvature).
+    left = [math.inf] + [lim(a, step[3]) for a, step in zip(accel, steps, strict=True)]
+    right = [lim(a, step[2]) for a, step in zip(accel, steps, strict=True)] + [math.inf]
+    limit = [min(a, b) for a, b in zip(left, right, strict=True)]
     u = [0.0] * len(nodes)
     u[-1] = limit[-1]
     for i in range(len(nodes) - 2, -1, -1):
-        a_total = lam * mu_step[i] * GRAVITY_MPS2
-        u[i] = min(limit[i], braking_step(u[i + 1], a_total, step_k[i],
-                                          nodes[i + 1] - nodes[i], max_decel_mps2))
+        s_a, s_b, k_a, k_b = steps[i]
+        step = arc_braking_step if k_a == k_b else braking_step
+        u[i] = min(limit[i], step(u[i + 1], accel[i], max(k_a, k_b), s_b - s_a, max_decel_mps2))
     return np.asarray(nodes), np.asarray(u), np.asarray(limit)
 
 
@@ -155,7 +160,8 @@ def _steps(pieces: Sequence[Piece], breakpoints: Sequence[float]
         length, k0, k1 = piece.length_m, piece.kappa_start_1pm, piece.kappa_end_1pm
         if length <= 0.0:
             continue
-        n = 1 if k0 == k1 == 0.0 else max(1, math.ceil(length / PROFILE_STEP_M))
+        # Straights and arcs in one step (exact, :func:`arc_braking_step`); clothoids in steps.
+        n = 1 if k0 == k1 else max(1, math.ceil(length / PROFILE_STEP_M))
         for i in range(n):
             a, b = start + length * i / n, start + length * (i + 1) / n
             ka, kb = k0 + (k1 - k0) * i / n, k0 + (k1 - k0) * (i + 1) / n
@@ -184,7 +190,7 @@ def braking_step(u_end: float, a_total: float, kappa: float, ds: float,
     200.0
     """
     if kappa <= 0.0:
-        return u_end + 2.0 * min(a_total, max_decel_mps2) * ds
+        return arc_braking_step(u_end, a_total, kappa, ds, max_decel_mps2)
     if u_end * kappa >= a_total:
         return u_end  # no braking left at the end's lateral demand
     # (w − u)² = 4 ds² (a² − w² κ²), root w ≥ u.
@@ -192,6 +198,39 @@ def braking_step(u_end: float, a_total: float, kappa: float, ds: float,
     disc = 4.0 * ds * ds * (a_total * a_total * (1.0 + c) - (kappa * u_end) ** 2)
     w = (u_end + math.sqrt(disc)) / (1.0 + c)
     return min(w, u_end + 2.0 * max_decel_mps2 * ds)
+
+
+def arc_braking_step(u_end: float, a_total: float, kappa: float, ds: float,
+                     max_decel_mps2: float) -> float:
+    """v² at the start of ``ds`` of constant curvature ``kappa`` from ``u_end`` at its end, braking
+    with all the g-g circle leaves: exact.
+
+    With ``w = κ v²`` (the lateral acceleration) braking backwards gives
+    ``dw/ds = 2κ √(a² − w²)``, so ``asin(w/a)`` grows by ``2κ ds`` (at most to π/2, the arc's
+    limit); where the circle would leave more than the brakes' ``a_max``, w grows linearly by
+    ``2κ a_max ds`` first, up to ``√(a² − a_max²)``. On a straight (κ = 0):
+    ``u + 2 min(a, a_max) ds``.
+
+    Examples
+    --------
+    >>> round(arc_braking_step(50.0, 4.0, 0.04, 10.0, 1e9), 4)  # 100 sin(asin(0.5) + 0.8)
+    96.9602
+    """
+    if kappa <= 0.0:
+        return u_end + 2.0 * min(a_total, max_decel_mps2) * ds
+    w = kappa * u_end
+    if w >= a_total:
+        return u_end  # at or above the limit: nothing left to brake with
+    if max_decel_mps2 < a_total:  # the brakes bind while the lateral demand is low
+        w_switch = math.sqrt(a_total * a_total - max_decel_mps2 * max_decel_mps2)
+        if w < w_switch:
+            linear = 2.0 * kappa * max_decel_mps2 * ds
+            if w + linear <= w_switch:
+                return (w + linear) / kappa
+            ds -= (w_switch - w) / (2.0 * kappa * max_decel_mps2)
+            w = w_switch
+    angle = min(math.asin(w / a_total) + 2.0 * kappa * ds, 0.5 * math.pi)
+    return a_total * math.sin(angle) / kappa
 
 
 def max_entry_speed_mps(s_m: np.ndarray, reach_v2: np.ndarray, dead_time_s: float,

@@ -279,8 +279,12 @@ def turn_feasibility(
     play = 0.5 * (lane_width_m - vehicle_width_m)
     play_outer = play - vehicle_length_m**2 / (8.0 * radius_m)
     shift, tangent_offset = clothoid_offsets_m(radius_m, clothoid_m)
-    common = dict(entry_speed_mps=entry_speed_mps, lam=utilization_factor,
-                  dead_time_s=dead_time_s, max_decel_mps2=max_decel_mps2)
+
+    def assess_line(path: Literal["centreline", "outer", "cut"], radius: float,
+                    pieces: list[Piece], mu_of: FrictionOfS,
+                    points: tuple[float, ...]) -> TurnLimit:
+        return _assess(path, radius, pieces, mu_of, points, entry_speed_mps,
+                       utilization_factor, dead_time_s, max_decel_mps2)
 
     def friction_on(pieces: list[Piece]) -> tuple[FrictionOfS, tuple[float, ...]]:
         # The road's change point moved onto the line (later on a line outside the centre).
@@ -298,7 +302,7 @@ def turn_feasibility(
 
     def assess(path: Literal["centreline", "outer"], radius: float) -> TurnLimit:
         pieces = line(radius)
-        return _assess(path, radius, pieces, *friction_on(pieces), **common)
+        return assess_line(path, radius, pieces, *friction_on(pieces))
 
     r_cut = effective_radius_m(radius_m, turn_angle_rad, play, play_outer, shift)
     cut_offset = (play + play_outer + shift) / (1.0 - math.cos(0.5 * turn_angle_rad))
@@ -324,8 +328,8 @@ def turn_feasibility(
     else:
         centreline = assess("centreline", radius_m)
         outer = assess("outer", radius_m + play_outer)
-        cut = _assess("cut", r_cut, [p for p in cut_pieces if p.length_m > 0.0], mu_cut_of,
-                      (*points, cut_start), **common)
+        cut = assess_line("cut", r_cut, [p for p in cut_pieces if p.length_m > 0.0],
+                          mu_cut_of, (*points, cut_start))
         # The cut circle turns in earlier: for curves of more than 2·atan(1/2) ≈ 53° that costs a
         # braking-limited entry more than its larger radius gains (docs/feasibility.md).
         with_play = max(centreline, outer, cut, key=lambda limit: limit.max_entry_speed_mps)
