@@ -149,8 +149,6 @@ def _entry_values(axis: str, width: int, value: GridEntry) -> tuple[GridValue, .
     if not isinstance(value, list) or len(value) != width:
         raise ValueError(f"grid {axis!r}: value {value!r} must be a list of {width} values, "
                          f"one per key")
-    if any(isinstance(x, list) for x in value):
-        raise ValueError(f"grid {axis!r}: value {value!r} nests lists")
     return tuple(value)
 
 
