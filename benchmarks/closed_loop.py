@@ -33,6 +33,7 @@ from typing import Any
 from threadpoolctl import threadpool_limits
 
 from mufusion.configurations import FrictionConfiguration
+from mufusion.estimators import SensorModel
 from mufusion.planner import TrackingController, TractionAdaptivePlanner
 from mufusion.planner.acados_backend import AcadosBackend
 from mufusion.reproduction.variants import PAPER_METHOD
@@ -109,6 +110,7 @@ def instrumented(clock: StageClock) -> Iterator[None]:
         (TrackingController, "command", "controller"),
         (ClosedLoop, "run", "loop/other"),
         (AcadosBackend, "solve", "acados backend"),
+        (SensorModel, "frame", "estimation+fusion"),
     ]
     configurations = [FrictionConfiguration]
     while configurations:

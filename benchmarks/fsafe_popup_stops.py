@@ -16,7 +16,7 @@ A variant with ``need > mean`` is one where no estimate the fusion stands behind
 leaving the lane is then the price of the estimate's declared uncertainty, not of the planner.
 
 Run: ``python benchmarks/fsafe_popup_stops.py DIR``. Prints a table and a final JSON line; numbers
-go to docs/experiments.md ("F-safe's lane in the pop-up").
+go to docs/decisions/0027 ("F-safe's lane in the pop-up").
 """
 
 from __future__ import annotations

@@ -12,7 +12,6 @@ from typing import Any
 
 import numpy as np
 
-from mufusion.configurations import Configuration
 from mufusion.sim.records import (
     EstimateGrid,
     LoopRatesMeta,
@@ -82,7 +81,7 @@ def run_meta(**values: Any) -> RunMeta:
     zeros = np.zeros_like(s).tolist()
     base: dict[str, Any] = dict(
         scenario_name="turn",
-        configuration=Configuration.F,
+        configuration="F",
         seed=0,
         scenario_config={},
         vehicle=VehicleGeometry(name="truck", length_m=6.28, width_m=2.6, wheelbase_m=3.4,

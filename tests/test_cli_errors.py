@@ -33,7 +33,7 @@ def _said(result) -> str:
          "planner.reference_braking_fraction"),
         (["run", "turn", "--set", "planner.reference_regain_limit=2"],
          "planner.reference_regain_limit"),
-        (["run", "popup", "-c", "F_safe"], "--config must be one of"),
+        (["run", "popup", "-c", "F_safe"], "'F_safe' is neither a built-in configuration"),
         (["run", "nowhere.toml"], "does not exist"),
     ],
 )

@@ -70,7 +70,9 @@ def run(
             "--config",
             "-c",
             help="Friction estimate the planner uses: GT (ground truth), L (local only), "
-            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe).",
+            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe), or your "
+            "own as module:Class (imported from the current directory) or an entry point of "
+            "mufusion.friction_sources.",
         ),
     ] = "F",
     set_: Annotated[
@@ -81,19 +83,31 @@ def run(
         "results/run"
     ),
     gif: Annotated[bool, typer.Option(help="Also write an animated GIF of the run.")] = True,
+    planner: Annotated[
+        str | None,
+        typer.Option(help="Your own planner: module:Class (called with the vehicle's parameters "
+                     "and the planner configuration) or an entry point of mufusion.planners."),
+    ] = None,
+    controller: Annotated[
+        str | None,
+        typer.Option(help="Your own controller: module:Class or an entry point of "
+                     "mufusion.controllers (called like a planner plug-in)."),
+    ] = None,
 ) -> None:
     """Run one scenario in closed loop: writes the run log, summary.json and figures.
 
     The exit code is 0 when the run completes, also when the vehicle crashes: that is a result.
     """
-    from mufusion.configurations import CONFIGURATION_NAMES
+    from mufusion.configurations.plugins import check_plugins
     from mufusion.metrics import compute_metrics
     from mufusion.plots.run_figures import single_run_figures
     from mufusion.scenarios import load_scenario
     from mufusion.scenarios.runner import run_scenario
 
-    if config not in CONFIGURATION_NAMES:
-        _fail(f"--config must be one of {', '.join(CONFIGURATION_NAMES)}, got {config!r}")
+    try:
+        check_plugins(config=config, planner=planner, controller=controller)
+    except ValueError as err:
+        _fail(str(err))
     try:
         cfg = load_scenario(scenario, list(set_ or []))
     except ValueError as err:
@@ -101,7 +115,8 @@ def run(
     _check_out_dir(out)
     with _progress() as progress:
         task = progress.add_task(f"{cfg.name} / {config}", total=cfg.duration_s)
-        log = run_scenario(cfg, config, progress=lambda t: progress.update(task, completed=t))
+        log = run_scenario(cfg, config, progress=lambda t: progress.update(task, completed=t),
+                           planner=planner, controller=controller)
         progress.update(task, completed=cfg.duration_s)
     log.save(out / "log")
     metrics = compute_metrics(log)

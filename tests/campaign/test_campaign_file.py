@@ -57,7 +57,13 @@ def test_shards_partition_the_campaign_and_keep_each_variant_whole(tmp_path, sha
 @pytest.mark.parametrize(
     ("text", "match"),
     [
-        ('scenarios = ["popup"]\nconfigs = ["Q"]', "unknown configs"),
+        ('scenarios = ["popup"]\nconfigs = ["Q"]', "configs: 'Q' is neither a built-in"),
+        ('scenarios = ["popup"]\nconfigs = ["no_such_mod:S"]',
+         "configs: plug-in 'no_such_mod:S': module 'no_such_mod' failed to import"),
+        ('scenarios = ["popup"]\nplanner = "no_such_mod:P"',
+         "planner.*plug-in 'no_such_mod:P': module 'no_such_mod' failed to import"),
+        ('scenarios = ["popup"]\ncontroller = "json:JSONDecoder"',
+         "controller.*is not a controller"),
         ('scenarios = []', "scenarios"),
         ('scenarios = ["popup"]\n[grid]\n"friction.mu" = []', "no values"),
         ('scenarios = ["popup"]\ncolour = "red"', "colour"),
@@ -163,6 +169,19 @@ def test_published_campaign_files_validate(path):
     scenarios validate (``campaign_specs`` checks each before anything runs, so a typo in a grid
     key, e.g. ``friction.mu_trun``, fails here and not mid-campaign)."""
     assert campaign_specs(load_campaign(path))
+
+
+def test_a_controller_plugin_reaches_every_run_and_its_stored_spec(tmp_path):
+    from mufusion.campaign.runs import spec_record
+
+    text = 'scenarios = ["popup"]\nconfigs = ["GT", "F"]\n'
+    plain = campaign_specs(load_campaign(_write(tmp_path, text)))
+    assert all(s.controller is None for s in plain)
+    assert "controller" not in spec_record(plain[0])  # records of earlier campaigns still match
+    spec = "mufusion.planner:TrackingController"
+    specs = campaign_specs(load_campaign(_write(tmp_path, f'{text}controller = "{spec}"\n')))
+    assert [s.controller for s in specs] == [spec, spec] and specs[0].planner is None
+    assert spec_record(specs[0])["controller"] == spec
 
 
 def test_a_zipped_axis_takes_its_values_together(tmp_path):

@@ -26,7 +26,7 @@ def test_fusion_mode_and_built_source_agree(name: str, mode: str | None) -> None
     source = make_configuration(configuration)
     assert source.name == name
     assert source.configuration is configuration
-    assert getattr(source, "mode", None) == mode
+    assert getattr(source.estimator, "mode", None) == mode
     assert configuration.label.startswith(f"{name} (")
 
 

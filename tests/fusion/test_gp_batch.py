@@ -14,7 +14,7 @@ def _compare(batch, rows):
     for i, row in enumerate(rows):
         for field in ("mean", "std", "lower", "mu_hat"):
             np.testing.assert_allclose(
-                getattr(batch, field)[i], getattr(row, field), rtol=0, atol=1e-10
+                getattr(batch, field)[i], getattr(row, field), rtol=0, atol=1e-9
             )
 
 

@@ -204,7 +204,7 @@ def test_an_odd_polygon_is_rejected() -> None:
 def test_the_solution_check_leaves_stage_0s_rear_lateral_force_to_the_state() -> None:
     # A vehicle whose rear slides: at stage 0 the linear rear tire gives 6 times the rear
     # polygon's radius. No solution can change the measured state; judged there, every plan of a
-    # sliding vehicle would be rejected (docs/experiments.md, "A check that judges the solver").
+    # sliding vehicle would be rejected (docs/decisions/0051, "A check that judges the solver").
     guess_x = np.zeros((N + 1, N_STATES))
     guess_x[:, State.vx] = 15.0
     guess_x[:, State.s] = 1.5 * np.arange(N + 1)

@@ -6,7 +6,6 @@ import pytest
 
 from mufusion.metrics import compute_metrics
 from mufusion.planner import FallbackReason
-from mufusion.planner.ocp import PlannerConfig, PlausibilityLimits, polygon_directions
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
 
@@ -115,24 +114,20 @@ def test_gt_leaves_the_arc_in_lane_when_the_reference_regains_speed_on_the_ellip
     assert at_once.min_lane_margin_m < m.min_lane_margin_m
 
 
-def test_a_vehicle_whose_rear_slides_keeps_its_plans() -> None:
-    # Car, 14 m/s onto μ 0.2, curve 40 m ahead, left, no clothoid (marginal), F-safe: in the arc
-    # the rear slides for a while, and the plans' first stage (the measured state) has the
-    # linear rear tire far outside the rear polygon. The solution check used to judge that
-    # stage too and rejected every plan of the sliding car: five in a row, the minimal-risk
-    # stop, a spin and 1.05 m out of the lane (with the plans' front force started from the
-    # realised one, docs/experiments.md).
+def test_the_marginal_car_on_mu_02_keeps_its_plans_and_its_lane() -> None:
+    # Car, 14 m/s onto μ 0.2, curve 40 m ahead, left, no clothoid (marginal), F-safe. Before the
+    # planner's stages took enough RK4 steps to be stable at low speed (docs/decisions/0053) the
+    # rear slid in the arc, and the solution check, judging stage 0's rear force (the measured
+    # state's), rejected every plan of the sliding car: five in a row, the minimal-risk stop, a
+    # spin and 1.05 m out of the lane (docs/decisions/0050, 0051). Now the rear no longer slides
+    # here (measured: no plan's first stage outside the rear polygon, body slip ≤ 0.06 rad, with
+    # or without ABS); the check's stage-0 rule itself is tested in tests/planner. What must hold
+    # in this marginal variant: the car keeps its plans and its lane.
     cfg = load_scenario("turn", overrides=[
         "initial_speed_mps=14", "friction.mu_turn=0.2", "turn.start_ahead_m=40",
         "turn.direction=left", "turn.clothoid_m=0", "vehicle=car",
     ])
     log = run_scenario(cfg, "F-safe")
-    plans = log.plans
-    first = plans[plans["k"] == 0]
-    _, ratio = polygon_directions(PlannerConfig().polygon_sides)  # the scenarios' polygons
-    outside = (first["fyr_n"].abs()
-               > (ratio + PlausibilityLimits().rear_polygon_tolerance) * first["limit_rear_n"])
-    assert outside.sum() >= 5  # the state slid, step after step
     m = compute_metrics(log)
     assert m.feasibility == "marginal"
     assert m.fallbacks == 0 and not m.minimal_risk and not m.spun

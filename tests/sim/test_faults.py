@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from factories import run_meta
-from mufusion.configurations import make_configuration
+from mufusion.configurations import make_estimator
 from mufusion.metrics import compute_metrics
 from mufusion.planner import PlannerConfig, TrackingController, TractionAdaptivePlanner
 from mufusion.planner.safety import SafetySettings
@@ -111,19 +111,17 @@ def test_local_dropout_keeps_the_local_estimator_from_measuring() -> None:
 class _Raising:
     """A friction source that works, then raises from ``fail_at`` steps on."""
 
+    channels = frozenset()
+
     def __init__(self, fail_at: int) -> None:
-        self.inner = make_configuration("GT")
         self.calls = 0
         self.fail_at = fail_at
 
-    def observe(self, t_s, utilization_front, utilization_rear, mu_front, mu_rear):
-        pass
-
-    def step(self, s_ahead_m, mu_true_ahead, utilization, *, camera_ok=True, t_s=None):
+    def step(self, frame):
         self.calls += 1
         if self.calls > self.fail_at:
             raise RuntimeError("sensor bus down")
-        return self.inner.step(s_ahead_m, mu_true_ahead, utilization)
+        return np.full(frame.s_ahead_m.shape, 0.8)
 
 
 class _RaisingPlanner(TractionAdaptivePlanner):
@@ -147,7 +145,7 @@ def _loop(friction=None, planner=None, safety: SafetySettings | None = None):
         world=world, params=TRUCK,
         plant=Plant(TRUCK, initial_state(TRUCK, 30.0, 0.0, 0.0, 15.0)),
         planner=planner, controller=TrackingController(TRUCK, planner.config),
-        friction=friction or make_configuration("GT"), rates=LoopRates(),
+        friction=friction or make_estimator("GT"), rates=LoopRates(),
         reference_speed_mps=15.0, lane_bounds_m=(-0.45, 0.45), meta=run_meta(),
         safety=safety or SafetySettings(),
     )

@@ -7,6 +7,7 @@ import pytest
 
 from factories import run_meta
 from mufusion.configurations import FrictionEstimate
+from mufusion.estimators import Channel
 from mufusion.metrics import compute_metrics
 from mufusion.planner import Plan, PlannerObstacle
 from mufusion.road import FrictionMap, Obstacle, straight_road
@@ -52,15 +53,14 @@ class _Controller:
 
 
 class _Friction:
+    channels = frozenset({Channel.TRUTH})
+
     def __init__(self) -> None:
         self.utilizations: list[float] = []
 
-    def observe(self, t_s, utilization_front, utilization_rear, mu_front, mu_rear):
-        pass
-
-    def step(self, s_ahead_m, mu_true_ahead, utilization, *, camera_ok=True, t_s=None):
-        self.utilizations.append(utilization)
-        return FrictionEstimate(s_m=np.asarray(s_ahead_m), mu_hat=np.asarray(mu_true_ahead) - 0.1,
+    def step(self, frame, truth):
+        self.utilizations.append(frame.utilization_peak)
+        return FrictionEstimate(s_m=frame.s_ahead_m, mu_hat=truth.mu - 0.1,
                                 local_available=False, local_mu=None)
 
 
@@ -129,7 +129,7 @@ def test_utilization_reaches_the_estimator() -> None:
 
 
 def test_each_plan_is_given_the_front_force_the_tires_deliver() -> None:
-    # The plans' front-force state starts from the realised force (docs/experiments.md, "A check
+    # The plans' front-force state starts from the realised force (docs/decisions/0051, "A check
     # that judges the solver"): the planner gets the front axle's body-frame force of the plant
     # step that ends at its tick, none before the clock starts or at t = 0.
     loop, planner, _, _ = _loop(steer_rad=0.05)

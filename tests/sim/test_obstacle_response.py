@@ -71,6 +71,7 @@ class _FailingPlanner:
 def _events(speed_mps: float) -> list[str]:
     from factories import run_meta
     from mufusion.configurations import FrictionEstimate
+    from mufusion.estimators import Channel
     from mufusion.road import FrictionMap, Obstacle, straight_road
     from mufusion.sim.loop import ClosedLoop, LoopRates
     from mufusion.sim.world import World
@@ -82,11 +83,10 @@ def _events(speed_mps: float) -> list[str]:
             return ActuatorCommand(0.0, -2000.0, -2000.0)
 
     class _Friction:
-        def observe(self, *args):
-            pass
+        channels = frozenset({Channel.TRUTH})
 
-        def step(self, s_ahead_m, mu_true_ahead, utilization, *, camera_ok=True, t_s=None):
-            return FrictionEstimate(s_m=np.asarray(s_ahead_m), mu_hat=np.asarray(mu_true_ahead),
+        def step(self, frame, truth):
+            return FrictionEstimate(s_m=frame.s_ahead_m, mu_hat=truth.mu,
                                     local_available=False, local_mu=None)
 
     road = straight_road(300.0, friction=FrictionMap.step(0.8, 0.8, 40.0),

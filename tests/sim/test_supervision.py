@@ -193,7 +193,9 @@ def caution_runs():
 def test_caution_alone_drives_off_and_lane_recovery_keeps_the_lane(caution_runs) -> None:
     neither = compute_metrics(caution_runs["neither"])
     both = compute_metrics(caution_runs["both"])
-    assert neither.max_lane_excursion_m > 1.0
+    # Without probing and lane recovery F-safe leaves the lane (by over 1 m before the vehicle
+    # had ABS; 0.94 m with it, docs/decisions/0052); with both it keeps it.
+    assert neither.max_lane_excursion_m > 0.5
     assert both.max_lane_excursion_m == 0.0 and not both.minimal_risk
     events = caution_runs["both"].events
     assert (events["kind"] == "lane_recovery").sum() >= 3

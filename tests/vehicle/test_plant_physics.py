@@ -248,7 +248,7 @@ def test_bad_arguments_are_rejected_with_their_names() -> None:
 def test_the_front_lateral_force_is_the_body_frame_share_of_the_lateral_balance() -> None:
     # Steered and braking: the wheel frame's F_x has a lateral share sin δ in the body frame, so
     # the body-frame force differs from the wheel frame's F_y, and with the rear's F_y it is
-    # what accelerates the body sideways (the planner's F_yf, docs/experiments.md).
+    # what accelerates the body sideways (the planner's F_yf, docs/decisions/0051).
     plant = Plant(CAR, initial_state(CAR, 0.0, 0.0, 0.0, 15.0))
     for _ in range(60):
         out = plant.step(ActuatorCommand(0.08, -900.0, -300.0), 0.9, 0.9)

@@ -72,7 +72,7 @@ def execute_run(spec: RunSpec) -> RunPayload:
     """
     try:
         cfg = load_scenario(spec.scenario, spec.all_overrides)
-        log = run_scenario(cfg, spec.config)
+        log = run_scenario(cfg, spec.config, planner=spec.planner, controller=spec.controller)
         metrics = compute_metrics(log)
         with tempfile.TemporaryDirectory(prefix="mufusion-run-") as tmp:
             log.save(tmp)

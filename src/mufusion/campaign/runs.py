@@ -34,8 +34,15 @@ class CampaignInterrupted(KeyboardInterrupt):
 
 
 def spec_record(spec: RunSpec) -> dict[str, Any]:
-    """The spec as stored in its ``result.json`` (compared on resume)."""
-    return json.loads(json.dumps(asdict(spec)))
+    """The spec as stored in its ``result.json`` (compared on resume).
+
+    Plug-in fields left at None are not stored: a run stored before they existed still matches.
+    """
+    record = asdict(spec)
+    for key in ("planner", "controller"):
+        if record[key] is None:
+            del record[key]
+    return json.loads(json.dumps(record))
 
 
 def execute_campaign(

@@ -14,6 +14,12 @@ from typing import Annotated
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from mufusion.configurations import CONFIGURATION_NAMES
+from mufusion.configurations.plugins import (
+    CONTROLLERS,
+    PLANNERS,
+    check_component_spec,
+    check_friction_spec,
+)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -47,7 +53,8 @@ class CampaignFile(BaseModel):
 
         name = "friction sweep"
         scenarios = ["popup"]
-        configs = ["GT", "P", "F", "F-safe"]
+        configs = ["GT", "P", "F", "F-safe"]  # or a plug-in: "mypkg.estimators:SlipRLS"
+        # planner = "mypkg.planners:MyMPC"    # optional: a planner / controller plug-in
         overrides = ["duration_s=4"]          # applied to every run
         seeds = 20                            # optional: every variant with 20 seeds
         [grid]                                # every combination becomes one variant
@@ -70,6 +77,10 @@ class CampaignFile(BaseModel):
     overrides: list[str] = Field(default_factory=list)
     grid: dict[str, list[GridEntry]] = Field(default_factory=dict)
     seeds: Annotated[int, Field(ge=1, le=MAX_SEEDS)] | None = None
+    planner: str | None = None
+    """A planner plug-in for every run (``module:Class`` or an entry point); None: the package's."""
+    controller: str | None = None
+    """A controller plug-in for every run; None: the package's."""
 
     @field_validator("scenarios")
     @classmethod
@@ -80,11 +91,23 @@ class CampaignFile(BaseModel):
     @field_validator("configs")
     @classmethod
     def _known_configs(cls, v: list[str]) -> list[str]:
-        unknown = [c for c in v if c not in CONFIGURATION_NAMES]
-        if unknown:
-            raise ValueError(f"unknown configs {unknown}; allowed: {list(CONFIGURATION_NAMES)}")
+        for config in v:
+            try:
+                check_friction_spec(config)
+            except ValueError as err:
+                raise ValueError(f"configs: {err}") from None
         _reject_repeats("configs", v)
         return v
+
+    @field_validator("planner")
+    @classmethod
+    def _usable_planner(cls, v: str | None) -> str | None:
+        return None if v is None else check_component_spec(v, PLANNERS)
+
+    @field_validator("controller")
+    @classmethod
+    def _usable_controller(cls, v: str | None) -> str | None:
+        return None if v is None else check_component_spec(v, CONTROLLERS)
 
     @field_validator("overrides")
     @classmethod

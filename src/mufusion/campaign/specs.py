@@ -29,7 +29,7 @@ class RunSpec:
     scenario
         Built-in scenario name or path of a TOML file.
     config
-        Friction-estimation configuration: ``GT``, ``L``, ``P``, ``F`` or ``F-safe``.
+        Friction source: ``GT``, ``L``, ``P``, ``F``, ``F-safe`` or a plug-in's name.
     variant
         Label of the scenario variant (e.g. ``"friction.mu=0.8"``), used in tables and names.
     overrides
@@ -42,6 +42,9 @@ class RunSpec:
     index
         Position in the whole campaign (all shards); the run's directory name starts with it.
         ``None`` until assigned (:func:`with_indices`).
+    planner, controller
+        Plug-ins to plan and control with (``module:attribute`` or an entry point's name);
+        ``None``: the package's own.
     """
 
     scenario: str
@@ -51,6 +54,8 @@ class RunSpec:
     seed: int | None = None
     grid: tuple[tuple[str, GridValue], ...] = field(default_factory=tuple)
     index: int | None = None
+    planner: str | None = None
+    controller: str | None = None
 
     @property
     def all_overrides(self) -> list[str]:
@@ -184,6 +189,8 @@ def campaign_specs(
                             seed=seed,
                             grid=grid,
                             index=variant_index * len(campaign.configs) + c,
+                            planner=campaign.planner,
+                            controller=campaign.controller,
                         )
                         for c, config in enumerate(campaign.configs)
                     ]

@@ -1,21 +1,32 @@
 """The friction sources the planner can drive on: GT, L, P, F and F-safe (paper Sec. IV-B).
 
-The layer between estimation and planning: each configuration combines the emulated estimators
-(:mod:`mufusion.estimators`) and, for F and F-safe, the GP fusion (:mod:`mufusion.fusion`) into
-one ``step`` that returns a :class:`FrictionEstimate` over the grid ahead.
+The layer between estimation and planning. A friction source reads a sensor frame
+(:mod:`mufusion.estimators.sensors`; never the true friction, except GT) and returns a
+:class:`FrictionEstimate` over the grid ahead (:mod:`~mufusion.configurations.interface`). The
+paper's configurations combine the emulated estimators' reports and, for F and F-safe, the GP
+fusion (:mod:`mufusion.fusion`); a source of your own plugs in the same way
+(:mod:`~mufusion.configurations.plugins`).
 """
 
+from mufusion.configurations.interface import (
+    MU_HAT_MAX,
+    MU_HAT_MIN,
+    FrictionEstimate,
+    FrictionEstimator,
+    FrictionSource,
+    channels_of,
+    step_source,
+)
 from mufusion.configurations.registry import (
     CONFIGURATION_NAMES,
     PAPER_CONFIGURATIONS,
     Configuration,
 )
 from mufusion.configurations.sources import (
-    MU_HAT_MAX,
-    MU_HAT_MIN,
+    EmulatedConfiguration,
     FrictionConfiguration,
-    FrictionEstimate,
     make_configuration,
+    make_estimator,
 )
 
 __all__ = [
@@ -24,7 +35,13 @@ __all__ = [
     "MU_HAT_MIN",
     "PAPER_CONFIGURATIONS",
     "Configuration",
+    "EmulatedConfiguration",
     "FrictionConfiguration",
     "FrictionEstimate",
+    "FrictionEstimator",
+    "FrictionSource",
+    "channels_of",
     "make_configuration",
+    "make_estimator",
+    "step_source",
 ]

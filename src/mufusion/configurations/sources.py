@@ -1,31 +1,32 @@
 """The friction-estimation configurations of the paper (Sec. IV-B): GT, L, P, F, and F-safe.
 
-All five share one step interface, so the closed loop does not care which one it drives::
+Each is an estimator on the sensor frame
+(:class:`~mufusion.configurations.interface.FrictionEstimator`): it reads what the emulated
+camera and slip estimator report (:mod:`mufusion.estimators.sensor_model`), never the true
+friction, except GT, which declares the truth channel and reads nothing else::
 
-    estimate = configuration.step(s_ahead_m, mu_true_ahead, utilization)
+    estimate = step_source(estimator, sensors, s_ahead_m, mu_true_ahead, utilization)
     planner.step(..., mu_hat_of_s=lambda s: np.interp(s, s_ego + estimate.s_m, estimate.mu_hat))
 
 ``GT``
     Ground truth: ``μ̂(s) = μ_gt(s)``.
 ``L``
-    Local only: the held local estimate minus its worst-case error over the whole horizon,
+    Local only: the held slip report minus its worst-case error over the whole horizon,
     ``μ̂(s) = μ̂_l − max{|e_l|}``.
 ``P``
     Predictive only: the lowest μ of the camera's (always correct) class at each ``s``; beyond
     the camera range the last in-range value is held. The camera's error model does not affect P:
-    only the class is used.
+    only the class is read.
 ``F``
-    Fused (paper): camera class values and margins, replaced near the vehicle by the local
-    estimate when it is available, fused by GP regression; ``μ̂`` is the posterior's lower
-    95 % bound (paper Sec. III).
+    Fused (paper): the camera's μ reports and margins, replaced near the vehicle by the slip
+    report when it measured, fused by GP regression; ``μ̂`` is the posterior's lower 95 % bound
+    (paper Sec. III).
 ``F-safe``
     As F with the fusion's ``mode="safe"`` (see :mod:`mufusion.fusion`).
 
-Every configuration updates the local estimator at every step, so the local value and its
-availability are logged for all of them. Each ``μ̂`` is finally clipped into
-``[MU_HAT_MIN, MU_HAT_MAX]``: the planner's friction polygons need a positive radius (the GP's
-lower bound far from any data, or L after a tiny measurement, could fall to or below 0), and no
-tire exceeds μ = 2.
+The slip estimator reports at every step whichever configuration reads it, so the local value
+and its availability are logged for all of them. Each ``μ̂`` is finally clipped into
+``[MU_HAT_MIN, MU_HAT_MAX]`` (:func:`~mufusion.configurations.interface.step_source`).
 """
 
 from __future__ import annotations
@@ -33,10 +34,15 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
+from mufusion.configurations.interface import (
+    FrictionEstimate,
+    FrictionEstimator,
+    channels_of,
+    step_source,
+)
 from mufusion.configurations.registry import Configuration
 from mufusion.estimators import (
     CAMERA_RANGE_M,
@@ -44,61 +50,21 @@ from mufusion.estimators import (
     PAPER_CLASSES,
     PAPER_LOCAL_TIMING,
     UTILIZATION_THRESHOLD,
-    LocalEstimate,
     LocalEstimator,
     LocalTiming,
     SurfaceClass,
-    check_error_model,
-    predictive_estimate,
     validate_classes,
 )
-from mufusion.estimators.predictive import check_grid
-from mufusion.fusion import PAPER_PRIOR, FusedEstimate, FusionData, GPFusion, assemble_inputs
-
-# Clip range of every μ̂ handed to the planner [-] (see the module docstring): 0.05 is half the
-# lowest class value the paper admits (snow/ice starts at 0.1).
-MU_HAT_MIN = 0.05
-MU_HAT_MAX = 2.0
+from mufusion.estimators.sensor_model import SensorModel, make_sensor_model
+from mufusion.estimators.sensors import Channel, SensorFrame, TrueFriction
+from mufusion.fusion import PAPER_PRIOR, GPFusion, GPPrior, assemble_inputs
 
 
-@dataclass(frozen=True)
-class FrictionEstimate:
-    """One planning step's friction estimate over the grid ahead of the vehicle.
+class FrictionConfiguration(FrictionEstimator):
+    """Base of the paper's configurations: an estimator on the sensor frame.
 
-    Attributes
-    ----------
-    s_m : numpy.ndarray, shape (n,)
-        Distances ahead of the vehicle [m] (the ``s_ahead_m`` passed to ``step``).
-    mu_hat : numpy.ndarray, shape (n,)
-        Friction coefficient the planner uses at each distance [-]; finite, in
-        ``[MU_HAT_MIN, MU_HAT_MAX]``.
-    local_available : bool
-        Whether the local estimator measured at this step.
-    local_mu : float or None
-        Held local estimate including its error [-] (None only if it never had a value).
-    fused : FusedEstimate or None
-        The GP posterior on ``s_m`` (F and F-safe only).
-    data : FusionData or None
-        The fusion's input data (F and F-safe only).
-    """
-
-    s_m: np.ndarray
-    mu_hat: np.ndarray
-    local_available: bool
-    local_mu: float | None
-    fused: FusedEstimate | None = None
-    data: FusionData | None = None
-
-
-def _read_only(a: np.ndarray) -> np.ndarray:
-    a.setflags(write=False)
-    return a
-
-
-class FrictionConfiguration:
-    """Base of the configurations: the local estimator, input checks, ``step`` and ``reset``.
-
-    Use :func:`make_configuration` to build one. Subclasses implement :meth:`_mu_hat`.
+    Use :func:`make_estimator` to build one (or :func:`make_configuration` for one together with
+    its emulated sensors). Subclasses implement :meth:`step`.
     """
 
     configuration: Configuration
@@ -108,162 +74,72 @@ class FrictionConfiguration:
         """The configuration's short name (``"GT"``, ..., ``"F-safe"``)."""
         return self.configuration.value
 
-    def __init__(
-        self,
-        *,
-        local: LocalEstimator,
-        classes: tuple[SurfaceClass, ...],
-        predictive_error: str,
-        rng: np.random.Generator | None,
-        range_m: float,
-    ) -> None:
-        self.local = local
-        self.classes = classes
-        self.predictive_error = predictive_error
-        self.rng = rng
-        self.range_m = range_m
-
-    def __repr__(self) -> str:
-        return f"<{type(self).__name__} {self.name!r}>"
-
-    def reset(self) -> None:
-        """Forget the local estimator's measurements (the rng is not rewound)."""
-        self.local.reset()
-
-    def observe(
-        self,
-        t_s: float,
-        utilization_front: float,
-        utilization_rear: float,
-        mu_front: float,
-        mu_rear: float,
-    ) -> None:
-        """Record the realised tire state after a plant step (time ``t_s`` [s], its end).
-
-        Only a local timing with its own sample rate keeps these (the authors' 4 Hz estimator);
-        with the paper's per-step timing the planning step's peak utilization is all it needs,
-        and this returns at once.
-        """
-        if not self.local.timing.per_planning_step:
-            self.local.observe(t_s, utilization_front, utilization_rear, mu_front, mu_rear)
-
     def step(
-        self,
-        s_ahead_m: np.ndarray,
-        mu_true_ahead: np.ndarray,
-        utilization: float,
-        *,
-        camera_ok: bool = True,
-        t_s: float | None = None,
-    ) -> FrictionEstimate:
-        """Estimate the friction over the grid ahead for one planning step.
-
-        Parameters
-        ----------
-        s_ahead_m : array_like, shape (n,)
-            Distances ahead of the vehicle [m], strictly increasing from 0 (paper:
-            0, 1, ..., 50 m).
-        mu_true_ahead : array_like, shape (n,)
-            True μ at those distances [-]; ``mu_true_ahead[0]`` is under the vehicle.
-        utilization : float
-            Realised tire-force utilization over the last planning interval (its maximum) [-].
-        camera_ok : bool
-            False when the camera delivers nothing usable this step (dropped out, or its values
-            were invalid and discarded): P then assumes the lowest class minimum everywhere,
-            F and F-safe fuse without predictive data.
-        t_s : float, optional
-            Time of this step [s]. With a local timing that samples at its own rate (not once
-            per planning step) the local estimate is the one published by ``t_s`` from what
-            :meth:`observe` recorded, and ``utilization`` is not used.
-
-        Returns
-        -------
-        FrictionEstimate
-
-        Raises
-        ------
-        ValueError
-            If the grid does not start at 0 m or is not strictly increasing, a μ is not
-            finite and > 0 (or the μ under the vehicle exceeds 2), the utilization is not
-            finite and ≥ 0, or (P, F, F-safe) a μ within the camera range lies in no class.
-        """
-        s, mu = check_grid(s_ahead_m, mu_true_ahead, mu_name="mu_true_ahead")
-        if s[0] != 0.0:
-            raise ValueError(f"s_ahead_m must start at 0 m (under the vehicle), got {s[0]!r}")
-        if self.local.timing.per_planning_step or t_s is None:
-            local = self.local.update(float(mu[0]), utilization)
-        else:
-            local = self.local.update_at(t_s)
-        mu_hat, fused, data = self._mu_hat(s, mu, local, camera_ok)
-        # np.clip's values for these non-zero bounds, without its per-call overhead.
-        mu_hat = np.minimum(np.maximum(np.asarray(mu_hat, dtype=float), MU_HAT_MIN), MU_HAT_MAX)
-        if not np.all(np.isfinite(mu_hat)):
-            # A NaN would silently remove the friction constraint in the planner: fail loudly.
-            raise ValueError(f"configuration {self.name!r} produced a non-finite μ̂: {mu_hat}")
-        return FrictionEstimate(
-            s_m=_read_only(s),
-            mu_hat=_read_only(mu_hat),
-            local_available=local.available,
-            local_mu=local.mu,
-            fused=fused,
-            data=data,
-        )
-
-    def _mu_hat(
-        self, s: np.ndarray, mu: np.ndarray, local: LocalEstimate, camera_ok: bool
-    ) -> tuple[np.ndarray, FusedEstimate | None, FusionData | None]:
+        self, frame: SensorFrame, truth: TrueFriction | None = None
+    ) -> FrictionEstimate | np.ndarray:
+        """The configuration's μ̂ on ``frame.s_ahead_m`` (clipped by the caller)."""
         raise NotImplementedError
 
 
 class GroundTruth(FrictionConfiguration):
-    """GT: the true friction ahead (paper Sec. IV-B, ``μ̂(s) = μ_gt(s)``)."""
+    """GT: the true friction ahead (paper Sec. IV-B, ``μ̂(s) = μ_gt(s)``); reads the truth."""
 
     configuration = Configuration.GT
+    channels = frozenset({Channel.TRUTH})
 
-    def _mu_hat(self, s, mu, local, camera_ok):
-        return mu.copy(), None, None
+    def step(self, frame, truth=None):
+        if truth is None:
+            raise ValueError("GT needs the true friction: call it step(frame, truth)")
+        return truth.mu
 
 
 class LocalOnly(FrictionConfiguration):
-    """L: the held local estimate minus its worst-case error, over the whole horizon."""
+    """L: the held slip report minus its worst-case error, over the whole horizon."""
 
     configuration = Configuration.L
+    channels = frozenset[Channel]()
 
-    def _mu_hat(self, s, mu, local, camera_ok):
+    def step(self, frame, truth=None):
         # μ̂_l = −max{|e_l|} + (μ_gt(0) + e_l if available else μ̂_0)  (paper Sec. IV-B)
-        return np.full(s.shape, local.mu - self.local.max_error), None, None
+        return np.full(frame.s_ahead_m.shape, frame.slip.mu - frame.slip.margin)
 
 
 class PredictiveOnly(FrictionConfiguration):
-    """P: the lowest μ of the camera's class at each s, held beyond the camera's range."""
+    """P: the lowest μ of the camera's class at each s, held beyond the camera's range.
+
+    Only the class matters to P, so the camera's μ reports (and their error model) are not read.
+    """
 
     configuration = Configuration.P
+    channels = frozenset({Channel.CAMERA_CLASSES})
 
-    def _mu_hat(self, s, mu, local, camera_ok):
-        # Only the class matters to P, so the reported value's error model is irrelevant here.
-        if not camera_ok:
+    def __init__(self, classes: Sequence[SurfaceClass] = PAPER_CLASSES) -> None:
+        self.classes = validate_classes(classes)
+
+    def step(self, frame, truth=None):
+        camera = frame.camera
+        if camera is None or not camera.available:
             # No class seen: the lowest class minimum is all P can assume.
-            return np.full(s.shape, min(c.mu_low for c in self.classes)), None, None
-        camera = predictive_estimate(s, mu, classes=self.classes, range_m=self.range_m)
+            return np.full(frame.s_ahead_m.shape, min(c.mu_low for c in self.classes))
         mu_hat = np.array(camera.mu_low)
         seen = camera.in_range
         # The camera sees a prefix of the grid (s ≤ range, s[0] = 0): hold its last value.
         mu_hat[~seen] = mu_hat[seen][-1]
-        return mu_hat, None, None
+        return mu_hat
 
 
 class Fused(FrictionConfiguration):
-    """F / F-safe: camera and local estimates fused by GP regression (paper Sec. III)."""
+    """F / F-safe: camera and slip reports fused by GP regression (paper Sec. III)."""
+
+    channels = frozenset({Channel.CAMERA_CLASSES, Channel.CAMERA_MU})
 
     def __init__(
         self,
         *,
         configuration: Configuration,
-        prior,
-        s_local_m: float | None,
-        **common,
+        prior: GPPrior = PAPER_PRIOR,
+        s_local_m: float | None = None,
     ) -> None:
-        super().__init__(**common)
         mode = configuration.fusion_mode
         if mode is None:
             raise ValueError(f"configuration {configuration.value!r} is not a fused one")
@@ -279,27 +155,126 @@ class Fused(FrictionConfiguration):
             self._fusion = GPFusion(self.prior, s, mode=self.mode)
         return self._fusion
 
-    def _mu_hat(self, s, mu, local, camera_ok):
-        camera = predictive_estimate(
-            s, mu, classes=self.classes, error=self.predictive_error, rng=self.rng,
-            range_m=self.range_m,
-        )
+    def step(self, frame, truth=None):
+        s, camera, slip = frame.s_ahead_m, frame.camera, frame.slip
+        if camera is None or camera.mu is None:
+            raise ValueError(f"{self.name} reads the camera's μ reports: declare Channel.CAMERA_MU")
         extra = {} if self.s_local_m is None else {"s_local_m": self.s_local_m}
-        # Drawn even without a camera, so that the random errors stay in step with a run
-        # without the fault; NaN marks "no data" to the assembly.
-        camera_mu = camera.mu if camera_ok else np.full(s.shape, np.nan)
+        # NaN marks "no data" to the assembly (an unavailable camera reports NaN everywhere).
         # Paper Sec. III, input data: the local estimate replaces the camera's for s < s_l.
         data = assemble_inputs(
             s,
-            camera_mu,
+            camera.mu,
             camera.margin,
-            local_mu=local.mu if local.available else None,
-            local_margin=self.local.max_error,
+            local_mu=slip.mu if slip.available else None,
+            local_margin=slip.margin,
             mode=self.mode,
             **extra,
         )
         fused = self._fusion_on(s).step(data)
-        return np.asarray(fused.mu_hat, dtype=float), fused, data
+        return FrictionEstimate(
+            s_m=s, mu_hat=np.asarray(fused.mu_hat, dtype=float), local_available=slip.available,
+            local_mu=slip.mu, fused=fused, data=data,
+        )
+
+
+def make_estimator(
+    name: str | Configuration,
+    *,
+    classes: Sequence[SurfaceClass] = PAPER_CLASSES,
+    length_scale_m: float | None = None,
+    s_local_m: float | None = None,
+) -> FrictionConfiguration:
+    """One of the paper's estimators on the sensor frame (GT, L, P, F, F-safe).
+
+    Parameters
+    ----------
+    name : Configuration or its name
+        Configuration (paper Sec. IV-B; F-safe is F with the fusion's safe mode).
+    classes : sequence of SurfaceClass
+        The camera's class table (P's lowest class minimum when the camera is out).
+    length_scale_m : float, optional
+        GP kernel length scale [m]; None keeps the fusion's default prior.
+    s_local_m : float, optional
+        Reach ``s_l`` of the local estimate in the fusion input [m]; None keeps the default.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is unknown (the message lists the names) or a parameter is out of range.
+    """
+    configuration = Configuration.parse(name)
+    table = validate_classes(classes)
+    if s_local_m is not None and not (math.isfinite(s_local_m) and s_local_m >= 0.0):
+        raise ValueError(f"s_local_m must be finite and ≥ 0 m or None, got {s_local_m!r}")
+    if configuration is Configuration.GT:
+        return GroundTruth()
+    if configuration is Configuration.L:
+        return LocalOnly()
+    if configuration is Configuration.P:
+        return PredictiveOnly(table)
+    prior = PAPER_PRIOR
+    if length_scale_m is not None:
+        if not (math.isfinite(length_scale_m) and length_scale_m > 0.0):
+            raise ValueError(f"length_scale_m must be finite and > 0 m, got {length_scale_m!r}")
+        prior = dataclasses.replace(PAPER_PRIOR, length_scale_m=float(length_scale_m))
+    return Fused(configuration=configuration, prior=prior, s_local_m=s_local_m)
+
+
+class EmulatedConfiguration:
+    """A paper configuration together with its emulated sensors, driven by the true friction.
+
+    For use outside the closed loop (figures, tests, studies): ``step`` takes the true μ ahead,
+    lets :attr:`sensors` report on it and hands the frame to :attr:`estimator`
+    (:func:`~mufusion.configurations.interface.step_source`).
+    """
+
+    def __init__(self, sensors: SensorModel, estimator: FrictionConfiguration) -> None:
+        self.sensors = sensors
+        self.estimator = estimator
+        self._channels = channels_of(estimator)
+
+    @property
+    def name(self) -> str:
+        return self.estimator.name
+
+    @property
+    def configuration(self) -> Configuration:
+        return self.estimator.configuration
+
+    @property
+    def local(self) -> LocalEstimator:
+        """The emulated slip-based estimator."""
+        return self.sensors.local
+
+    def __repr__(self) -> str:
+        return f"<EmulatedConfiguration {self.name!r}>"
+
+    def reset(self) -> None:
+        """Forget the sensors' measurements and the estimator's state (the rng is not rewound)."""
+        self.sensors.reset()
+        self.estimator.reset()
+
+    def observe(self, t_s: float, utilization_front: float, utilization_rear: float,
+                mu_front: float, mu_rear: float) -> None:
+        """See :meth:`~mufusion.estimators.sensor_model.SensorModel.observe`."""
+        self.sensors.observe(t_s, utilization_front, utilization_rear, mu_front, mu_rear)
+
+    def step(
+        self,
+        s_ahead_m: np.ndarray,
+        mu_true_ahead: np.ndarray,
+        utilization: float,
+        *,
+        camera_ok: bool = True,
+        t_s: float | None = None,
+    ) -> FrictionEstimate:
+        """The estimate for one planning step; parameters as
+        :meth:`~mufusion.estimators.sensor_model.SensorModel.frame`."""
+        return step_source(
+            self.estimator, self.sensors, s_ahead_m, mu_true_ahead, utilization,
+            camera_ok=camera_ok, t_s=t_s, channels=self._channels,
+        )
 
 
 def make_configuration(
@@ -316,42 +291,28 @@ def make_configuration(
     utilization_threshold: float = UTILIZATION_THRESHOLD,
     range_m: float = CAMERA_RANGE_M,
     local_timing: LocalTiming = PAPER_LOCAL_TIMING,
-) -> FrictionConfiguration:
-    """Build one of the paper's friction-estimation configurations.
+) -> EmulatedConfiguration:
+    """One of the paper's friction-estimation configurations with its emulated sensors.
 
     Parameters
     ----------
     name : Configuration or its name {"GT", "L", "P", "F", "F-safe"}
         Configuration (paper Sec. IV-B; F-safe is F with the fusion's safe mode).
-    classes : sequence of SurfaceClass
-        Camera class table; default the paper's.
-    local_error, predictive_error : {"none", "worst_over", "worst_under", "random"}
-        Error models of the local and camera estimators (:mod:`mufusion.estimators.errors`).
-    rng : numpy.random.Generator, optional
-        Source of all randomness; required if an error model is ``"random"``.
-    initial_local_mu : float, optional
-        Held local value before the first measurement [-] (the paper's ``μ̂_0``); None: the
-        first step measures the μ under the vehicle as if the estimate had just been available.
-    length_scale_m : float, optional
-        GP kernel length scale [m]; None keeps the fusion's default prior.
-    s_local_m : float, optional
-        Reach ``s_l`` of the local estimate in the fusion input [m]; None keeps the fusion's
-        default.
-    max_local_error : float
-        Worst-case local error ``max{|e_l|}`` [-] (paper: 0.025).
-    utilization_threshold : float
-        Local estimate available iff utilization exceeds this [-] (paper: 0.5).
-    range_m : float
-        Camera range ``s_f`` [m] (paper: 50).
-    local_timing : LocalTiming
-        Sampling, buffer, axle, publishing and delay of the local estimator; default the paper's
-        (one sample per step, as ``step`` feeds it). Other timings are fed through
-        ``configuration.local.observe`` / ``update_at`` (:mod:`mufusion.estimators.timing`).
+    length_scale_m, s_local_m
+        The estimator's: see :func:`make_estimator`.
+    classes, local_error, predictive_error, rng, initial_local_mu
+        The sensors': see :func:`~mufusion.estimators.sensor_model.make_sensor_model`
+        (``classes`` is also P's class table).
+    max_local_error, utilization_threshold, range_m, local_timing
+        The sensors' as well (a local timing with its own sample rate is fed through
+        ``configuration.observe``).
 
     Returns
     -------
-    FrictionConfiguration
-        With ``.name``, ``.step(s_ahead_m, mu_true_ahead, utilization)`` and ``.reset()``.
+    EmulatedConfiguration
+        With ``.name``, ``.step(s_ahead_m, mu_true_ahead, utilization)`` and ``.reset()``: the
+        estimator of :func:`make_estimator` on the sensors of
+        :func:`~mufusion.estimators.sensor_model.make_sensor_model`.
 
     Raises
     ------
@@ -366,34 +327,12 @@ def make_configuration(
     >>> est.mu_hat.tolist()  # 60 m is beyond the camera's 50 m: 0.4 is held
     [0.6, 0.6, 0.4, 0.4, 0.4, 0.4, 0.4]
     """
-    configuration = Configuration.parse(name)
-    table = validate_classes(classes)
-    check_error_model("local_error", local_error, rng)
-    check_error_model("predictive_error", predictive_error, rng)
-    if not (math.isfinite(range_m) and range_m > 0.0):
-        raise ValueError(f"range_m must be finite and > 0 m, got {range_m!r}")
-    if s_local_m is not None and not (math.isfinite(s_local_m) and s_local_m >= 0.0):
-        raise ValueError(f"s_local_m must be finite and ≥ 0 m or None, got {s_local_m!r}")
-    local = LocalEstimator(
-        max_error=max_local_error,
-        utilization_threshold=utilization_threshold,
-        error=local_error,
-        rng=rng,
-        initial_mu=initial_local_mu,
-        timing=local_timing,
+    estimator = make_estimator(
+        name, classes=classes, length_scale_m=length_scale_m, s_local_m=s_local_m
     )
-    simple = {c.configuration: c for c in (GroundTruth, LocalOnly, PredictiveOnly)}
-    if configuration in simple:
-        return simple[configuration](
-            local=local, classes=table, predictive_error=predictive_error, rng=rng,
-            range_m=range_m,
-        )
-    prior = PAPER_PRIOR
-    if length_scale_m is not None:
-        if not (math.isfinite(length_scale_m) and length_scale_m > 0.0):
-            raise ValueError(f"length_scale_m must be finite and > 0 m, got {length_scale_m!r}")
-        prior = dataclasses.replace(PAPER_PRIOR, length_scale_m=float(length_scale_m))
-    return Fused(
-        configuration=configuration, prior=prior, s_local_m=s_local_m, local=local,
-        classes=table, predictive_error=predictive_error, rng=rng, range_m=range_m,
+    sensors = make_sensor_model(
+        classes=classes, local_error=local_error, predictive_error=predictive_error, rng=rng,
+        initial_local_mu=initial_local_mu, max_local_error=max_local_error,
+        utilization_threshold=utilization_threshold, range_m=range_m, local_timing=local_timing,
     )
+    return EmulatedConfiguration(sensors, estimator)

@@ -3,7 +3,9 @@
 The paper (Sec. IV-A) emulates state-of-the-art estimators by their availability, foresight and
 accuracy rather than implementing them; these are those emulations, as pure functions over
 arrays (:func:`predictive_estimate`, :func:`classify`) and one small stateful estimator that
-holds its latest value (:class:`LocalEstimator`, timed by a :class:`LocalTiming`).
+holds its latest value (:class:`LocalEstimator`, timed by a :class:`LocalTiming`). Together they
+are the vehicle's emulated sensors (:class:`SensorModel`), whose reports reach a friction source
+as a :class:`SensorFrame` (:mod:`mufusion.estimators.sensors`).
 """
 
 from mufusion.estimators.classes import (
@@ -27,6 +29,15 @@ from mufusion.estimators.predictive import (
     PredictiveEstimate,
     predictive_estimate,
 )
+from mufusion.estimators.sensor_model import SensorModel, make_sensor_model
+from mufusion.estimators.sensors import (
+    SENSOR_CHANNELS,
+    CameraReport,
+    Channel,
+    SensorFrame,
+    TrueFriction,
+    VehicleSignals,
+)
 from mufusion.estimators.timing import (
     AUTHORS_LOCAL_TIMING,
     LOCAL_TIMINGS,
@@ -45,17 +56,25 @@ __all__ = [
     "LOCAL_TIMINGS",
     "PAPER_CLASSES",
     "PAPER_LOCAL_TIMING",
+    "SENSOR_CHANNELS",
     "UTILIZATION_THRESHOLD",
+    "CameraReport",
+    "Channel",
     "ErrorModel",
     "LocalEstimate",
     "LocalEstimator",
     "LocalTiming",
     "PredictiveEstimate",
+    "SensorFrame",
+    "SensorModel",
     "SurfaceClass",
+    "TrueFriction",
+    "VehicleSignals",
     "check_error_model",
     "class_table",
     "classify",
     "local_timing",
+    "make_sensor_model",
     "predictive_estimate",
     "validate_classes",
 ]

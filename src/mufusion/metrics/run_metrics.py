@@ -83,6 +83,18 @@ class RunMetrics:
     faults, reactions
         The injected fault kinds, and the loop's reactions counted by kind
         (e.g. ``"estimate_fallback×3, minimal_risk×1"``; empty when none).
+    wheel_lock_max_s
+        Longest time a wheel stayed locked [s]: slip ratio at or below
+        :data:`LOCKED_SLIP` at a speed above :data:`SLIP_MIN_SPEED_MPS` (0 if never; ``None`` in
+        records written before wheel slips were logged). With slip control on it stays within
+        one ABS cycle (:data:`ONE_ABS_CYCLE_S`).
+    wheel_lock_within_abs_cycle
+        ``wheel_lock_max_s`` ≤ :data:`ONE_ABS_CYCLE_S`: no wheel stayed locked for longer than
+        one ABS cycle (``None`` in records written before wheel slips were logged).
+    slip_control_cycles
+        Cycles the vehicle's wheel-slip control (ABS, TCS) ran, both axles.
+    slip_control_active_s
+        Time with the slip control modulating either axle's torque [s].
     start_speed_mps, start_lateral_offset_m, start_heading_error_rad
         The state the run started from (its first tick): the scenario's, or the draw of its
         ``perturbation`` (:func:`mufusion.scenarios.config.perturbed`). ``None`` in records
@@ -126,6 +138,10 @@ class RunMetrics:
     start_speed_mps: float | None = None
     start_lateral_offset_m: float | None = None
     start_heading_error_rad: float | None = None
+    wheel_lock_max_s: float | None = None
+    wheel_lock_within_abs_cycle: bool | None = None
+    slip_control_cycles: int = 0
+    slip_control_active_s: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         return {k: _clean(v) for k, v in asdict(self).items()}
@@ -210,6 +226,7 @@ def compute_metrics(log: RunLog) -> RunMetrics:
         start_speed_mps=float(ts["speed_mps"].iloc[0]),
         start_lateral_offset_m=float(ts["d_m"].iloc[0]),
         start_heading_error_rad=float(ts["dpsi_rad"].iloc[0]),
+        **_wheels(ts, 1.0 / log.meta.rates.controller_hz),
     )
 
 
@@ -240,6 +257,42 @@ def _graded(ts: pd.DataFrame, tick_s: float) -> dict[str, Any]:
         "spun": bool(max_slip > SPIN_BODY_SLIP_RAD or heading > np.pi / 2),
         "off_road": bool(ts["off_road"].astype(bool).any()),
         "max_front_utilization": float(np.nanmax(util)) if np.isfinite(util).any() else 0.0,
+    }
+
+
+LOCKED_SLIP = -0.9
+"""A wheel whose slip ratio is at or below this turns at a tenth of its free-rolling speed or
+less: locked (it has lost nearly all its lateral grip)."""
+ONE_ABS_CYCLE_S = 0.2
+"""Longest lock [s] an ABS cycle lets through: the wheel-speed sensor sees a lock coming within
+a few samples and the brake is dumped within the actuator's lag (car 0.05 s, truck 0.15 s);
+production ABS cycles at 2–15 Hz (docs/vehicle.md, "Wheel-slip control")."""
+
+
+def _longest_run_s(flags: np.ndarray, tick_s: float) -> float:
+    """Longest stretch of consecutive true ``flags``, in seconds of ticks."""
+    if not flags.any():
+        return 0.0
+    edges = np.diff(np.concatenate(([0], flags.astype(np.int8), [0])))
+    return float((np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1)).max() * tick_s)
+
+
+def _wheels(ts: pd.DataFrame, tick_s: float) -> dict[str, Any]:
+    """Wheel-lock and slip-control outcomes (absent columns: a record from before they were)."""
+    if "wheel_slip_front" not in ts or ts["wheel_slip_front"].isna().all():
+        return {}
+    moving = ts["speed_mps"].to_numpy(dtype=float) > SLIP_MIN_SPEED_MPS
+    locked = moving & (
+        (ts["wheel_slip_front"].to_numpy(dtype=float) <= LOCKED_SLIP)
+        | (ts["wheel_slip_rear"].to_numpy(dtype=float) <= LOCKED_SLIP)
+    )
+    active = ts["slip_control_front"].astype(bool) | ts["slip_control_rear"].astype(bool)
+    longest = _longest_run_s(locked, tick_s)
+    return {
+        "wheel_lock_max_s": longest,
+        "wheel_lock_within_abs_cycle": longest <= ONE_ABS_CYCLE_S,
+        "slip_control_cycles": int(ts["slip_cycles"].iloc[-1]),
+        "slip_control_active_s": float(active.sum() * tick_s),
     }
 
 

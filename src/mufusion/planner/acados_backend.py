@@ -21,6 +21,7 @@ from mufusion.planner.front_force import (
     plan_from_augmented,
     tire_forces,
 )
+from mufusion.planner.integration import stage_steps
 from mufusion.planner.ocp import (
     MAX_SPEED_MPS,
     N_PARAMS,
@@ -161,7 +162,7 @@ ROBUST_HPIPM_MODE = "BALANCE"
 of the interior-point iteration and at the handling limit returns NaN (acados status 4) on
 QPs that ``BALANCE`` solves: on the published turn grid it failed 173 planning steps of GT in
 variants the oracle calls feasible, and five failures in a row stopped the truck before the
-curve (docs/experiments.md, "A QP that fails at the limit")."""
+curve (docs/decisions/0019, "A QP that fails at the limit")."""
 
 
 def problem_hash(params: VehicleParams, config: PlannerConfig,
@@ -180,6 +181,7 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "utilization": config.utilization_factor,
             # The slack penalties are written into the generated problem (ocp.cost.zl …).
             "slack_penalties": [config.weights.slack_l1, config.weights.slack_l2],
+            "rk4_steps": stage_steps(config, params),
             "iterate": _ITERATE_HEADER + _ITERATE_SOURCE,
         },
         sort_keys=True,
@@ -452,7 +454,8 @@ def _describe(
     so.hessian_approx = "GAUSS_NEWTON"
     so.integrator_type = "ERK"
     so.sim_method_num_stages = 4
-    so.sim_method_num_steps = 1
+    # Enough RK4 steps per stage that the model stays stable down to rest (planner/integration.py).
+    so.sim_method_num_steps = stage_steps(config, params)
     so.qp_solver_iter_max = 50
     # Written into the export directory by the caller, compiled there (no copy from the cwd).
     so.custom_update_filename = _ITERATE_C

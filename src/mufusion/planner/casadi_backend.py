@@ -18,6 +18,7 @@ from mufusion.planner.front_force import (
     plan_from_augmented,
     tire_forces,
 )
+from mufusion.planner.integration import stage_steps
 from mufusion.planner.ocp import (
     MAX_SPEED_MPS,
     N_PARAMS,
@@ -33,7 +34,7 @@ from mufusion.vehicle.planner_model import N_INPUTS, N_STATES, Input, State, fre
 
 
 class CasadiBackend:
-    """Multiple shooting with one RK4 step per stage (as acados' ERK), solved by IPOPT."""
+    """Multiple shooting with RK4 steps per stage (as acados' ERK), solved by IPOPT."""
 
     last_solve_retried = False  # IPOPT is the robust solver: nothing to retry with
 
@@ -59,11 +60,16 @@ class CasadiBackend:
                                          p[Param.rear_stiffness], params)
             return ca.vertcat(dx, u[Input.fyf]) if augmented else dx
 
-        k1 = f(x)
-        k2 = f(x + 0.5 * dt * k1)
-        k3 = f(x + 0.5 * dt * k2)
-        k4 = f(x + dt * k3)
-        step = ca.Function("step", [x, u, p], [x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)])
+        # As acados' ERK: stage_steps RK4 steps per stage (planner/integration.py).
+        h_step = dt / stage_steps(config, params)
+        xk = x
+        for _ in range(stage_steps(config, params)):
+            k1 = f(xk)
+            k2 = f(xk + 0.5 * h_step * k1)
+            k3 = f(xk + 0.5 * h_step * k2)
+            k4 = f(xk + h_step * k3)
+            xk = xk + h_step / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        step = ca.Function("step", [x, u, p], [xk])
         h = ca.Function("h", [x, u, p],
                         [constraint_expressions(x[:N_STATES], forces(x, u), p, params, ns,
                                                load_transfer=config.load_transfer)])

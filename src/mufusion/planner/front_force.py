@@ -4,7 +4,7 @@ The planner plans tire forces (TAMP). A force input may jump from one stage to t
 steering actuator cannot follow: at the truck's limit the plans reverse the front force between
 the polygon's bounds from one stage to the next (+38, +38, +12, −38, −38 kN on a straight at
 11 m/s), the next plan starts from a state the last one did not predict, and the loop weaves
-(docs/experiments.md, "Tracking at the limit"). With ``PlannerConfig.steering_rate_limit`` the
+(docs/decisions/0011, "Tracking at the limit"). With ``PlannerConfig.steering_rate_limit`` the
 OCP's state is the planner's six states plus ``F_yf``, and the input's ``Input.fyf`` slot is that
 force's rate, bounded by :func:`~mufusion.vehicle.planner_model.front_force_rate_limit_n_per_s`.
 The backends take and return the planner's ``(N+1, 6)`` states and ``(N, 3)`` tire forces:

@@ -4,7 +4,7 @@ The manoeuvre a supervisor falls back to when the planner has not produced a usa
 ``SafetySettings.max_consecutive_fallbacks`` steps in a row (or cannot be trusted otherwise). Its
 roll-out needs no solver: the planner's model under a braking and lane-keeping law.
 
-* Deceleration target ``a_k = minimal_risk_decel_fraction · μ̂(s_k) · g`` (default 0.5 μ̂ g),
+* Deceleration target ``a_k = minimal_risk_decel_fraction · μ̂(s_k) · g`` (default 0.8 μ̂ g),
   never more than stops the vehicle within the step; no traction. Below 1 m/s (the planner
   model's slip-speed floor) the vehicle is taken to rest and held there with the brakes on.
 * The braking force is split over the axles by their normal loads, and each axle's share is
@@ -23,6 +23,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from mufusion.planner.integration import stage_steps
 from mufusion.planner.ocp import PlannerConfig, longitudinal_force_bounds_n
 from mufusion.planner.sampling import SamplingConfig, rk4_step, steering_force_n
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
@@ -77,11 +78,12 @@ def minimal_risk_rollout(
     >>> cfg = PlannerConfig(horizon_steps=40)
     >>> xs, us = minimal_risk_rollout(np.array([0, 0.3, 0, 0, 10.0, 0]), 0.0,
     ...                               lambda s: 0 * s, lambda s: 0.8 + 0 * s, TRUCK, cfg)
-    >>> bool(xs[-1, State.vx] < 0.1), bool(abs(xs[-1, State.d]) < 0.1)
+    >>> bool(xs[-1, State.vx] < 0.1), bool(abs(xs[-1, State.d]) < 0.15)
     (True, True)
     """
     sc = sampling or SamplingConfig()
     n, dt, lam = config.horizon_steps, config.dt_s, config.utilization_factor
+    steps = stage_steps(config, params)
     m = params.mass_kg
     x = np.asarray(x0, dtype=float).copy()
     xs, us = [x], []
@@ -118,7 +120,8 @@ def minimal_risk_rollout(
             room = np.sqrt(max(limit_f**2 - fxf**2, 0.0)) * 0.95
             u[Input.fyf] = np.clip(fyf, -room, room)
             u[Input.fxf], u[Input.fxr] = fxf, fxr
-            x = rk4_step(x, u, kappa, c_r, params, dt)
+            for _ in range(steps):  # as the OCP integrates its stages (planner/integration.py)
+                x = rk4_step(x, u, kappa, c_r, params, dt / steps)
             x[State.vx] = max(x[State.vx], 0.0)
             ax = (fxf + fxr) / m
         xs.append(x)

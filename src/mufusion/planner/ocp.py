@@ -166,7 +166,7 @@ class PlannerConfig:
     # Share of the friction the speed reference's braking ramps before a curve assume, in (0, 1]
     # (planner/speed_profile.py): below 1 the reference starts braking earlier than the polygon
     # requires and keeps the rest as a reserve for braking the plans lose at the turn-in
-    # (docs/experiments.md, "A braking reserve in the speed reference").
+    # (docs/decisions/0031, "A braking reserve in the speed reference").
     reference_braking_fraction: float = 0.8
     # The reference regains speed from the vehicle's own no faster than the cruise traction cap
     # on the g-g ellipse allows (planner/speed_profile.py, ``regain_limited_profile_mps``).

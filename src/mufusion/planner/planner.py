@@ -290,7 +290,7 @@ class TractionAdaptivePlanner:
             # them. Left in, the corridor (placed along the guess, which may still run past the
             # obstacle) opens a side and the stopping plan swerves into it at the friction limit:
             # its rear axle exceeds the polygon, the plan is rejected, the shifted cruise plan is
-            # kept, and the stop under way turns into a late swerve (docs/experiments.md).
+            # kept, and the stop under way turns into a late swerve (docs/decisions/0022).
             clear = 0.5 * par.width_m + cfg.obstacle_margin_m
             obstacles = [o for o in obstacles if not in_path(
                 o.s_m, o.d_m, clear + 0.5 * o.width_m, float(x0[State.s]), float(x0[State.d]))]
@@ -314,7 +314,7 @@ class TractionAdaptivePlanner:
             # whatever guess (sampled roll-out, minimal-risk roll-out) it starts from
             # (planner/front_force.py). Without a measurement, from what the previous plan
             # commands now; that one is not what the tires deliver when the steering lags a plan
-            # that turned in hard, and the plans would carry the difference (docs/experiments.md,
+            # that turned in hard, and the plans would carry the difference (docs/decisions/0050,
             # "What carries the first plan").
             applied = (float(front_force_n) if front_force_n is not None
                        and math.isfinite(front_force_n)

@@ -144,7 +144,7 @@ def judged_rear_rows_n(
 
     Stage 0's rear lateral force is the measured state's: no solution can change it, and a
     vehicle whose rear slides puts it far outside the polygon (the linear tire). Judged there,
-    every plan of a sliding vehicle is rejected, exactly when it needs one (docs/experiments.md,
+    every plan of a sliding vehicle is rejected, exactly when it needs one (docs/decisions/0051,
     "A check that judges the solver").
     """
     fyr = rear_lateral_force_n(np.asarray(states)[:-1].T, stage["rear_stiffness"], params)

@@ -28,14 +28,17 @@ class SafetySettings:
         finite when no earlier profile covers it; the loop for a missing or stale estimate.
     minimal_risk_decel_fraction
         The minimal-risk manoeuvre brakes at this share of ``μ̂ g`` [-] (the rest stays for
-        lane keeping); the planner plans it so, and the loop's own lane-keeping braking uses it
-        when no plan can be trusted.
+        lane keeping); the planner plans it so (each axle's braking capped at 80 % of its
+        limit), and the loop's own lane-keeping braking uses this share of the friction circle
+        when no plan can be trusted (braking with what the lane's curvature leaves). 0.8: the
+        road's friction is used, not half of it (the vehicle's ABS holds the wheels should μ̂
+        over-estimate it).
     """
 
     max_estimate_age_s: float = 0.35
     max_consecutive_fallbacks: int = 5
     mu_floor: float = 0.1
-    minimal_risk_decel_fraction: float = 0.5
+    minimal_risk_decel_fraction: float = 0.8
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.max_estimate_age_s) and self.max_estimate_age_s > 0.0):

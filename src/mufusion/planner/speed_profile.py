@@ -168,7 +168,7 @@ def regain_limited_profile_mps(
     w = min(start_speed_mps * start_speed_mps, cap[0])
     # Where the profile ahead falls below the vehicle's speed, the way to its lowest point is a
     # deceleration: speed regained on it would only have to be braked away again, later and
-    # closer to the curve (docs/experiments.md, "No speed regained on the way to a curve").
+    # closer to the curve (docs/decisions/0044, "No speed regained on the way to a curve").
     lowest = min(cap)
     bottom = cap.index(lowest) if lowest < w else 0
     out = [w]

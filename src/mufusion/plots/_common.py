@@ -52,13 +52,14 @@ def require_logs(logs: Sequence[RunLog]) -> list[RunLog]:
 
 
 def config_name(log: RunLog) -> str:
-    """The configuration's short name of a run ("GT", "L", "P", "F", "F-safe")."""
-    return log.meta.configuration.value
+    """The configuration's short name of a run ("GT", …, "F-safe", or a plug-in's name)."""
+    return log.meta.configuration
 
 
 def config_color(log: RunLog, index: int) -> str:
-    """Colour of a run's configuration (``index`` is unused but kept for callers' symmetry)."""
-    return CONFIG_COLORS.get(log.meta.configuration, f"C{index % 10}")
+    """Colour of a run's configuration (a plug-in's: the ``index``-th of matplotlib's cycle)."""
+    builtin = log.meta.builtin
+    return CONFIG_COLORS[builtin] if builtin is not None else f"C{index % 10}"
 
 
 def start_s(log: RunLog) -> float:

@@ -7,7 +7,7 @@ own runs. :func:`ablation_tables` grades every run from its log
 (:func:`~mufusion.reproduction.graded.graded_outcome`) and :func:`effect_lines` says, per setting,
 what changed against the baseline, computed from those numbers.
 
-Running it is ``mufusion reproduce --ablation`` (docs/experiments.md has a recorded run).
+Running it is ``mufusion reproduce --ablation`` (docs/authors-settings.md has a recorded run).
 """
 
 from __future__ import annotations

@@ -97,7 +97,7 @@ def authors_sections(
         table = tables.get(var.key)
         if table is None:
             md += [f"One setting at a time: not run here (`{ABLATION_COMMAND}` runs it; "
-                   "docs/experiments.md records a run).", ""]
+                   "docs/authors-settings.md records a run).", ""]
         else:
             md += ["One setting at a time, each applied alone to the paper-text variant "
                    "(\"= baseline\": the setting does not reach that configuration):", ""]

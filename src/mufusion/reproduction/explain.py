@@ -77,7 +77,7 @@ def _collision_text(run, log: RunLog, by_key) -> str | None:
     ob, first = obstacles[0], hit.iloc[0]
     need = 0.5 * (ob.width_m + log.meta.vehicle.width_m)
     mu_hat, mu_true = _estimate_at_comparison(log)
-    name = log.meta.configuration.value
+    name = log.meta.configuration
     text = (
         f"{name} planned with μ̂ = {mu_hat:.3f} against μ = {mu_true:.2f} (planned-force "
         f"utilisation {_budget(run)} GT's). It hit the obstacle at t = {float(first['t_s']):.2f} s "

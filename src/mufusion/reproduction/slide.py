@@ -206,7 +206,7 @@ def slide_diagnosis(log: RunLog) -> SlideDiagnosis:
     steps = steps[steps["t_s"] >= 0.0] if not steps.empty else steps
     near = np.abs(stage["mu_hat"].to_numpy() - stage["mu_true"].to_numpy())
     return SlideDiagnosis(
-        configuration=log.meta.configuration.value,
+        configuration=log.meta.configuration,
         left_lane=bool(left.any()),
         lane_exit_t_s=exit_t,
         entered_opposing_lane=bool(opposing.any()),

@@ -23,6 +23,7 @@ from mufusion.sim.faults import Fault
 from mufusion.sim.loop import LoopRates
 from mufusion.sim.supervision import LaneRecoverySettings, ProbingSettings
 from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.slip_control import SlipControlSettings
 from mufusion.vehicle.surface_tires import (
     AUTHORS_TIRES,
     AUTHORS_TIRES_INTERPOLATED,
@@ -151,7 +152,7 @@ class PlannerSettings(_Strict):
     """Share of the friction the speed reference's braking ramps before a curve or a lower μ̂
     assume: 1 brakes as late as the friction polygon allows, less starts earlier and keeps the
     rest as a reserve (the curves' limit speeds are unchanged). The default 0.8 keeps a fifth
-    of it for the braking that plans lose while they turn in (docs/experiments.md, "A braking
+    of it for the braking that plans lose while they turn in (docs/decisions/0031, "A braking
     reserve in the speed reference")."""
     reference_regain_limit: bool = PlannerConfig.reference_regain_limit
     """In cruise, the speed reference regains speed from the vehicle's own no faster than the
@@ -191,10 +192,21 @@ class SimSettings(_Strict):
     torque time constant ahead, plus feedback on the measured torques, so the lagging brakes
     deliver the plan's forces on time (:class:`mufusion.planner.controller.ControllerGains`);
     ``false``: the forces planned for now, as in the paper's controller."""
+    abs: bool = True
+    """Anti-lock braking in the vehicle (:mod:`mufusion.vehicle.slip_control`), as on every
+    production car and truck; ``false`` shows what it does."""
+    tcs: bool = True
+    """Traction control in the vehicle (the same controller on drive torque)."""
 
     def surface_tires(self) -> SurfaceTireTable | None:
         """The plant's tire table (``None`` for the default tire)."""
         return _SURFACE_TIRES[self.tires]
+
+    def slip_control(self) -> SlipControlSettings | None:
+        """The vehicle's wheel-slip control (``None`` with ABS and TCS both off)."""
+        if not (self.abs or self.tcs):
+            return None
+        return SlipControlSettings(abs_enabled=self.abs, tcs_enabled=self.tcs)
 
 
 class InitialPerturbation(_Strict):

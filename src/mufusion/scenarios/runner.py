@@ -16,8 +16,22 @@ from collections.abc import Callable
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from mufusion.configurations import Configuration, make_configuration
-from mufusion.estimators import class_table, local_timing
+from mufusion.configurations import (
+    CONFIGURATION_NAMES,
+    Configuration,
+    FrictionConfiguration,
+    FrictionSource,
+    make_estimator,
+)
+from mufusion.configurations.plugins import (
+    CONTROLLERS,
+    PLANNERS,
+    import_from_cwd,
+    is_builtin,
+    make_component_plugin,
+    make_friction_plugin,
+)
+from mufusion.estimators import SurfaceClass, class_table, local_timing, make_sensor_model
 from mufusion.planner import (
     ControllerGains,
     PlannerConfig,
@@ -33,6 +47,7 @@ from mufusion.scenarios.config import (
     planner_lane_bounds_m,
 )
 from mufusion.scenarios.feasibility import classify_scenario
+from mufusion.sim.components import Controller, Planner
 from mufusion.sim.log import RunLog
 from mufusion.sim.loop import ClosedLoop
 from mufusion.sim.obstacle_response import ObstacleResponse
@@ -87,33 +102,43 @@ def planner_for(cfg: Scenario) -> TractionAdaptivePlanner:
     return TractionAdaptivePlanner(params, planner_config(cfg, params))
 
 
-def run_scenario(
+def build_loop(
     cfg: Scenario,
-    configuration: Configuration | str,
     *,
-    progress: Callable[[float], None] | None = None,
-) -> RunLog:
-    """Run one scenario with one friction configuration and return its log.
+    friction: Configuration | str | FrictionSource = Configuration.F,
+    planner: str | Planner | None = None,
+    controller: str | Controller | None = None,
+) -> ClosedLoop:
+    """Assemble the closed loop of one scenario: world, vehicle, sensors and the stack.
 
     Parameters
     ----------
     cfg
         Validated scenario.
-    configuration
-        ``GT``, ``L``, ``P``, ``F`` (fused, paper mode) or ``F-safe`` (fused, safe mode).
-    progress
-        Called with the simulated time after every planning step.
+    friction
+        A built-in configuration (``GT``, ``L``, ``P``, ``F``, ``F-safe``), a plug-in's name
+        (``"module:attribute"`` or an entry point of ``mufusion.friction_sources``, see
+        :mod:`mufusion.configurations.plugins`; made afresh for this run), or a friction source
+        object (:class:`~mufusion.configurations.FrictionSource`; its label is its ``name``
+        attribute, else its class name).
+    planner, controller
+        None for the package's own; else a plug-in's name (groups ``mufusion.planners``,
+        ``mufusion.controllers``; a factory is called ``factory(params, planner_config)``) or
+        the object.
+
+    Returns
+    -------
+    ClosedLoop
+        Ready to ``run(cfg.duration_s, warmup_steps=WARMUP_PLANNING_STEPS)``; its
+        ``meta.configuration`` is the friction source's label.
 
     Raises
     ------
     ValueError
-        If ``configuration`` is unknown.
-
-    Notes
-    -----
-    The run limits the BLAS thread pools (OpenBLAS of numpy and scipy) to one thread.
+        If ``friction`` names no configuration or plug-in, a plug-in is unusable
+        (:class:`~mufusion.configurations.plugins.PluginError`, naming it), or a friction source
+        object's label is a built-in configuration's name.
     """
-    configuration = Configuration.parse(configuration)
     # The start's perturbation has its own stream, so the estimators' draws (from the seed
     # itself) are the same with and without it.
     cfg = perturbed(cfg, np.random.default_rng(np.random.SeedSequence(cfg.seed, spawn_key=(1,))))
@@ -122,19 +147,28 @@ def run_scenario(
     s0 = cfg.start_s_m
     world = World(road=road, to_planner_obstacle=_planner_obstacle)
     rates = cfg.rates()
-    planner = planner_for(cfg)
-    controller = TrackingController(
-        params, planner.config, ControllerGains(torque_compensation=cfg.sim.torque_compensation)
+    classes = class_table(cfg.estimation.class_table)
+    source, label = _friction_source(friction, classes, cfg.estimation.length_scale_m)
+    own_config = planner_config(cfg, params)
+    the_planner: Planner = (
+        planner_for(cfg) if planner is None
+        else make_component_plugin(planner, PLANNERS, params, own_config)
+        if isinstance(planner, str) else planner
     )
-    rng = np.random.default_rng(cfg.seed)
-    friction = make_configuration(
-        configuration,
+    config = getattr(the_planner, "config", own_config)
+    the_controller: Controller = (
+        TrackingController(
+            params, config, ControllerGains(torque_compensation=cfg.sim.torque_compensation)
+        ) if controller is None
+        else make_component_plugin(controller, CONTROLLERS, params, config)
+        if isinstance(controller, str) else controller
+    )
+    sensors = make_sensor_model(
+        classes=classes,
         local_error=cfg.estimation.local_error,
         predictive_error=cfg.estimation.predictive_error,
-        rng=rng,
+        rng=np.random.default_rng(cfg.seed),
         initial_local_mu=cfg.estimation.initial_local_mu,
-        length_scale_m=cfg.estimation.length_scale_m,
-        classes=class_table(cfg.estimation.class_table),
         local_timing=local_timing(cfg.estimation.local_timing),
     )
     x0_x, x0_y, x0_psi = (
@@ -143,31 +177,97 @@ def run_scenario(
         )
     )
     plant = Plant(params, initial_state(params, x0_x, x0_y, x0_psi, cfg.initial_speed_mps),
-                  dt_s=1.0 / rates.plant_hz, surface_tires=cfg.sim.surface_tires())
-    loop = ClosedLoop(
+                  dt_s=1.0 / rates.plant_hz, surface_tires=cfg.sim.surface_tires(),
+                  slip_control=cfg.sim.slip_control())
+    return ClosedLoop(
         world=world,
         params=params,
         plant=plant,
-        planner=planner,
-        controller=controller,
-        friction=friction,
+        planner=the_planner,
+        controller=the_controller,
+        friction=source,
+        sensors=sensors,
         rates=rates,
         reference_speed_mps=cfg.cruise_speed_mps,
-        lane_bounds_m=(planner.config.lane_d_min_m, planner.config.lane_d_max_m),
+        lane_bounds_m=(config.lane_d_min_m, config.lane_d_max_m),
         emergency_on_obstacle=isinstance(cfg, PopupScenario) and cfg.emergency_on_obstacle,
         faults=tuple(cfg.faults),
         safety=cfg.safety,
         probing=cfg.probing,
         lane_recovery=cfg.lane_recovery,
-        utilization_factor=planner.config.utilization_factor,
+        utilization_factor=config.utilization_factor,
         obstacle_response=ObstacleResponse(
             brake_first=cfg.planner.brake_first,
-            utilization_factor=planner.config.utilization_factor,
-            polygon_sides=planner.config.polygon_sides, margin_m=planner.config.obstacle_margin_m,
+            utilization_factor=config.utilization_factor,
+            polygon_sides=config.polygon_sides, margin_m=config.obstacle_margin_m,
             planning_period_s=1.0 / rates.planner_hz,
         ),
-        meta=run_meta(cfg, configuration, params, road, planner.config),
+        meta=run_meta(cfg, label, params, road, config).model_copy(update={
+            "planner_plugin": _component_name(planner),
+            "controller_plugin": _component_name(controller),
+        }),
     )
+
+
+def _component_name(component: object) -> str | None:
+    if component is None or isinstance(component, str):
+        return component
+    return type(component).__name__
+
+
+def _friction_source(
+    friction: Configuration | str | FrictionSource,
+    classes: tuple[SurfaceClass, ...],
+    length_scale_m: float | None,
+) -> tuple[FrictionSource, str]:
+    """The friction source ``friction`` names, made for one run, and its label."""
+    if is_builtin(friction):
+        name = Configuration.parse(friction)  # type: ignore[arg-type]
+        return make_estimator(name, classes=classes, length_scale_m=length_scale_m), name.value
+    if isinstance(friction, str):
+        import_from_cwd()
+        return make_friction_plugin(friction), friction
+    label = str(getattr(friction, "name", type(friction).__name__))
+    if label in CONFIGURATION_NAMES and not isinstance(friction, FrictionConfiguration):
+        raise ValueError(f"friction source {friction!r} is labelled {label!r}, a built-in "
+                         "configuration's name: give it a name of its own")
+    return friction, label
+
+
+def run_scenario(
+    cfg: Scenario,
+    configuration: Configuration | str | FrictionSource,
+    *,
+    progress: Callable[[float], None] | None = None,
+    planner: str | Planner | None = None,
+    controller: str | Controller | None = None,
+) -> RunLog:
+    """Run one scenario with one friction source and return its log (:func:`build_loop`).
+
+    Parameters
+    ----------
+    cfg
+        Validated scenario.
+    configuration
+        ``GT``, ``L``, ``P``, ``F`` (fused, paper mode), ``F-safe`` (fused, safe mode), a
+        plug-in's name or a friction source (see :func:`build_loop`'s ``friction``).
+    progress
+        Called with the simulated time after every planning step.
+    planner, controller
+        None for the package's own, else a plug-in's name or the object (see
+        :func:`build_loop`).
+
+    Raises
+    ------
+    ValueError
+        If ``configuration`` names no configuration or usable plug-in, or a planner or
+        controller plug-in is unusable.
+
+    Notes
+    -----
+    The run limits the BLAS thread pools (OpenBLAS of numpy and scipy) to one thread.
+    """
+    loop = build_loop(cfg, friction=configuration, planner=planner, controller=controller)
     # One BLAS thread: the fusion's small matrix products gain nothing from a thread pool, and
     # on a busy machine its spinning threads made runs several times slower.
     with _blas_controller().limit(limits=1, user_api="blas"):
@@ -187,7 +287,7 @@ def _planner_obstacle(o: Obstacle) -> PlannerObstacle:
 
 def run_meta(
     cfg: Scenario,
-    configuration: Configuration,
+    configuration: Configuration | str,
     params: VehicleParams,
     road: Road,
     planner_cfg: PlannerConfig,
@@ -209,7 +309,7 @@ def run_meta(
     feasibility = classify_scenario(cfg, params)
     return RunMeta(
         scenario_name=cfg.name,
-        configuration=configuration,
+        configuration=str(configuration),
         seed=cfg.seed,
         scenario_config=cfg.model_dump(mode="json"),
         vehicle=VehicleGeometry(

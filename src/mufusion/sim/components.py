@@ -1,7 +1,8 @@
 """The closed loop's components as interfaces: what the loop calls on each, and their rates.
 
 A friction source, planner, controller or plant of your own plugs into
-:class:`~mufusion.sim.loop.ClosedLoop` by implementing the calls below; the package's own
+:class:`~mufusion.sim.loop.ClosedLoop` by implementing the calls below (a friction source:
+:class:`~mufusion.configurations.FrictionSource`, which reads a sensor frame); the package's own
 (:class:`~mufusion.configurations.FrictionConfiguration`,
 :class:`~mufusion.planner.TractionAdaptivePlanner`, :class:`~mufusion.planner.TrackingController`,
 :class:`~mufusion.vehicle.plant.Plant`) are what the runner wires in.
@@ -15,13 +16,22 @@ from typing import Protocol
 
 import numpy as np
 
-from mufusion.configurations import FrictionEstimate
+from mufusion.configurations import FrictionSource
 from mufusion.planner import Plan, PlannerMemory, PlannerObstacle
 from mufusion.planner.ocp import PlannerMode
 from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.plant import PlantOutput, PlantStateVector
 
 PlanningMode = PlannerMode
+
+__all__ = [
+    "Controller",
+    "FrictionSource",
+    "LoopRates",
+    "Planner",
+    "PlanningMode",
+    "PlantModel",
+]
 
 
 @dataclass(frozen=True)
@@ -63,39 +73,6 @@ def _check_divides(name: str, value: float, base_name: str, base: float) -> None
         raise ValueError(
             f"{name} must divide {base_name}={base:g} Hz into whole steps, got {value:g} Hz"
         )
-
-
-class FrictionSource(Protocol):
-    """A friction estimate over the grid ahead, once per planning step.
-
-    The interface of :class:`~mufusion.configurations.FrictionConfiguration`; a source of your
-    own plugs into :class:`ClosedLoop` by implementing these two calls.
-    """
-
-    def step(
-        self,
-        s_ahead_m: np.ndarray,
-        mu_true_ahead: np.ndarray,
-        utilization: float,
-        *,
-        camera_ok: bool = True,
-        t_s: float | None = None,
-    ) -> FrictionEstimate:
-        """The estimate at distances ``s_ahead_m`` ahead (``mu_true_ahead`` is the truth there,
-        ``utilization`` the peak realised tire utilization since the last step; ``camera_ok``
-        False while the camera is out)."""
-        ...
-
-    def observe(
-        self,
-        t_s: float,
-        utilization_front: float,
-        utilization_rear: float,
-        mu_front: float,
-        mu_rear: float,
-    ) -> None:
-        """Called after every plant step with the realised utilization and true μ per axle."""
-        ...
 
 
 class Planner(Protocol):

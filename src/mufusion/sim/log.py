@@ -9,6 +9,7 @@ Files in a run directory: ``meta.json`` (:class:`~mufusion.sim.records.RunMeta`)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import tempfile
@@ -168,6 +169,11 @@ def load_run(directory: str | Path) -> RunLog:
         frame = _read_table(file)
         if frame is None:
             frame = _to_frame(record_type, [])
+        # A column added to a record later, with a default, reads as that default in a log
+        # written before it existed.
+        for f in dataclasses.fields(record_type):
+            if f.name not in frame.columns and f.default is not dataclasses.MISSING:
+                frame[f.name] = f.default
         missing = [c for c in columns(record_type) if c not in frame.columns]
         if missing:
             raise ValueError(f"{str(file)!r} lacks the columns {missing} of table {table!r}")

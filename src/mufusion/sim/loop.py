@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mufusion.configurations import FrictionEstimate
+from mufusion.configurations import FrictionEstimate, channels_of, step_source
+from mufusion.estimators import SensorModel, VehicleSignals
 from mufusion.planner import Plan, PlannerObstacle
 from mufusion.planner.safety import SafetySettings
 from mufusion.sim.components import (
@@ -35,6 +36,7 @@ from mufusion.sim.minimal_risk import minimal_risk_command
 from mufusion.sim.obstacle_response import ObstacleResponse, obstacle_mode
 from mufusion.sim.recorder import Recorder
 from mufusion.sim.records import RunMeta
+from mufusion.sim.sensing import vehicle_signals
 from mufusion.sim.supervision import (
     LaneRecoverySettings,
     Prober,
@@ -69,7 +71,8 @@ class ClosedLoop:
     params
         Vehicle parameters (for the footprint and the plant).
     plant, planner, controller, friction
-        The components; see the module docstring for their calls.
+        The components; see the module docstring for their calls. ``friction`` reads what
+        ``sensors`` report (:func:`~mufusion.configurations.step_source`).
     rates
         Component rates.
     reference_speed_mps
@@ -91,6 +94,9 @@ class ClosedLoop:
     obstacle_response
         Stop in front of an obstacle where possible, else evade
         (:mod:`mufusion.sim.obstacle_response`); ``emergency_on_obstacle`` overrides it.
+    sensors
+        The vehicle's emulated sensors: the only part of the estimation that reads the true
+        friction (default: the paper's, without errors).
 
     Notes
     -----
@@ -127,6 +133,7 @@ class ClosedLoop:
     lane_recovery: LaneRecoverySettings = field(default_factory=LaneRecoverySettings)
     utilization_factor: float = 0.9
     obstacle_response: ObstacleResponse = field(default_factory=ObstacleResponse)
+    sensors: SensorModel = field(default_factory=SensorModel)
 
     def run(
         self,
@@ -163,6 +170,11 @@ class ClosedLoop:
         # The front axle's body-frame lateral force of the last plant step: each plan's force
         # state starts from it (None before the first step: the warm-up plans start from theirs).
         self._front_force_n: float | None = None
+        # The friction source's interface: its channels, and its per-plant-step call if it has one.
+        self._channels = channels_of(self.friction)
+        self._observe: Callable[[VehicleSignals], None] | None = getattr(
+            self.friction, "observe", None)
+        self._last_output: tuple[float, PlantOutput] | None = None  # (its time, the output)
         for fault in self.faults:
             self._recorder.event(fault.start_s, "fault_scheduled", _describe(fault))
         try:
@@ -208,7 +220,11 @@ class ClosedLoop:
 
             if control_tick:
                 assert estimate is not None  # a planning step comes first (i = 0)
-                command = self._command(t, xf, x_plant, plan, estimate)
+                # While the vehicle's slip control modulates a torque, the applied torque falls
+                # short of the command on purpose: the controller's lag feedback must not wind up.
+                slip = None if last is None else last.slip_control
+                modulated = slip is not None and (slip.front.active or slip.rear.active)
+                command = self._command(t, xf, x_plant, plan, estimate, modulated)
                 status = self._recorder.tick(
                     t, x_plant, xf, command, estimate.local_available, last, self._control_mode()
                 )
@@ -218,9 +234,12 @@ class ClosedLoop:
             mu_front, mu_rear = self.world.friction_under_axles(state, self.params)
             last = self.plant.step(command, mu_front, mu_rear)
             util_window = max(util_window, last.utilization_front, last.utilization_rear)
-            self.friction.observe(
+            self.sensors.observe(
                 t + dt, last.utilization_front, last.utilization_rear, mu_front, mu_rear
             )
+            self._last_output = (t + dt, last)
+            if self._observe is not None:
+                self._observe(vehicle_signals(t + dt, last, self.params))
 
     def _control_mode(self) -> str:
         if self._minimal_risk:
@@ -504,8 +523,11 @@ class ClosedLoop:
         # An absent camera, or one whose values are NaN, gives nothing usable: discarded.
         camera_ok = not ({"camera_dropout", "camera_nan"} & kinds)
         try:
-            return self.friction.step(
-                self.estimate_grid_m, mu_true, util, camera_ok=camera_ok, t_s=t
+            return step_source(
+                self.friction, self.sensors, self.estimate_grid_m, mu_true, util,
+                camera_ok=camera_ok, t_s=t, channels=self._channels,
+                signals=None if self._last_output is None else vehicle_signals(
+                    *self._last_output, self.params),
             )
         except Exception as exc:
             self._recorder.event(t, "friction_source_error", f"{type(exc).__name__}: {exc}")
@@ -524,14 +546,15 @@ class ClosedLoop:
         x_plant: np.ndarray,
         plan: Plan | None,
         estimate: FrictionEstimate,
+        slip_modulated: bool = False,
     ) -> ActuatorCommand:
         curvature = self.world.curvature_at(float(xf[State.s]))
         if plan is not None and not (self._minimal_risk and not self._planner_usable):
             try:
                 command = self.controller.command(
                     t, xf, float(x_plant[PlantState.STEER]), plan, curvature,
-                    (float(x_plant[PlantState.TORQUE_FRONT]),
-                     float(x_plant[PlantState.TORQUE_REAR])),
+                    None if slip_modulated else (float(x_plant[PlantState.TORQUE_FRONT]),
+                                                 float(x_plant[PlantState.TORQUE_REAR])),
                 ).clipped(self.params)
                 return self._probe_command(t, xf, command)
             except Exception as exc:
@@ -583,9 +606,10 @@ class ClosedLoop:
         s_ego = float(xf[State.s])
         s_abs = s_ego + self.estimate_grid_m
         # The local estimator has seen the tires rolling freely at the start.
-        self.friction.observe(0.0, 0.0, 0.0, *self.world.friction_under_axles(x_plant, self.params))
-        estimate = self.friction.step(
-            self.estimate_grid_m, self.world.friction(s_abs), 0.0, t_s=0.0
+        self.sensors.observe(0.0, 0.0, 0.0, *self.world.friction_under_axles(x_plant, self.params))
+        estimate = step_source(
+            self.friction, self.sensors, self.estimate_grid_m, self.world.friction(s_abs), 0.0,
+            t_s=0.0, channels=self._channels,
         )
         for k in range(steps):
             self._plan(xf, -(steps - k) / self.rates.planner_hz, s_ego, estimate, [], "cruise")

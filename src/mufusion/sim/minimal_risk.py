@@ -2,12 +2,15 @@
 
 Used by the loop once the planner has failed too often, or a component raised, and the planner
 cannot plan the stop itself. Deliberately simple (no model, no optimisation): curvature
-feed-forward plus lateral and heading feedback for steering, a constant deceleration at a declared
-share of the friction for braking, split over the axles by their static loads.
+feed-forward plus lateral and heading feedback for steering; braking with what the friction
+circle at a declared share of μ̂ g leaves after the lateral acceleration that following the lane
+takes (``v² κ``), split over the axles by their static loads. The vehicle's slip control (ABS)
+keeps the wheels rolling if μ̂ over-estimates the road.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,7 +50,8 @@ def minimal_risk_command(
         Friction assumed for braking [-] (the last usable estimate under the vehicle, or the
         floor).
     utilization
-        Share of ``μ g`` to brake with [-], in (0, 1].
+        Share of ``μ g`` the manoeuvre may use [-], in (0, 1]: the lateral acceleration the
+        lane's curvature asks at the current speed first, braking with the rest.
 
     Raises
     ------
@@ -74,7 +78,9 @@ def minimal_risk_command(
         - g.lateral_rad_per_m * d
         - g.heading_rad_per_rad * dpsi
     )
-    force = utilization * mu * params.mass_kg * GRAVITY_MPS2
+    available = utilization * mu * GRAVITY_MPS2
+    lateral = float(x[State.vx]) ** 2 * abs(curvature_1pm) if np.isfinite(x[State.vx]) else 0.0
+    force = params.mass_kg * math.sqrt(max(available * available - lateral * lateral, 0.0))
     share_front = params.cog_to_rear_axle_m / params.wheelbase_m
     r = params.wheel_radius_m
     return ActuatorCommand(

@@ -65,6 +65,7 @@ class Recorder:
         pose = self.world.pose(x_plant)
         status = self.world.footprint_status(pose, t_s, float(xf[State.s]), self.params)
         vx, vy = float(xf[State.vx]), float(xf[State.vy])
+        slip = None if last is None else last.slip_control
         self.log.append(
             Tick(
                 t_s=t_s,
@@ -103,6 +104,13 @@ class Recorder:
                 opposing_depth_m=status.opposing_depth_m,
                 road_margin_m=status.road_margin_m,
                 off_road=status.off_road,
+                wheel_slip_front=math.nan if last is None else last.front.slip_ratio,
+                wheel_slip_rear=math.nan if last is None else last.rear.slip_ratio,
+                slip_control_front=slip is not None and slip.front.active,
+                slip_control_rear=slip is not None and slip.rear.active,
+                slip_torque_removed_front_nm=0.0 if slip is None else slip.front.torque_removed_nm,
+                slip_torque_removed_rear_nm=0.0 if slip is None else slip.rear.torque_removed_nm,
+                slip_cycles=0 if slip is None else slip.cycles_front + slip.cycles_rear,
             )
         )
         return status

@@ -24,6 +24,7 @@ Tables (one record type each):
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -31,7 +32,7 @@ import numpy as np
 import numpy.typing as npt
 from pydantic import BaseModel, ConfigDict
 
-from mufusion.configurations import Configuration
+from mufusion.configurations import CONFIGURATION_NAMES, Configuration
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -80,6 +81,19 @@ class Tick:
     opposing_depth_m: float
     road_margin_m: float
     off_road: bool
+    # The wheels and the vehicle's wheel-slip control (ABS, TCS) in the plant step that ended at
+    # this tick (NaN / false / 0 before the first step and without slip control).
+    wheel_slip_front: float = math.nan
+    """Longitudinal slip ratio of the front wheels [-] (−1: locked)."""
+    wheel_slip_rear: float = math.nan
+    slip_control_front: bool = False
+    """Whether the slip controller modulated the front torque (ABS or TCS in any phase but pass)."""
+    slip_control_rear: bool = False
+    slip_torque_removed_front_nm: float = 0.0
+    """Torque the slip controller withheld from the front command [N m], ≥ 0."""
+    slip_torque_removed_rear_nm: float = 0.0
+    slip_cycles: int = 0
+    """Slip-control cycles (releases) started so far, both axles."""
 
 
 @dataclass(frozen=True)
@@ -278,7 +292,9 @@ class RunMeta(_Meta):
     """
 
     scenario_name: str
-    configuration: Configuration
+    configuration: str
+    """The friction source's label: a built-in configuration's name (``"GT"``, …, ``"F-safe"``) or
+    a plug-in's (its import path or entry-point name)."""
     seed: int
     scenario_config: dict[str, Any]
     vehicle: VehicleGeometry
@@ -295,11 +311,22 @@ class RunMeta(_Meta):
     feasibility_margin_mps: float | None = None
     """The oracle's margin: highest entry speed at which the manoeuvre fits, minus the entry
     speed [m/s]."""
+    planner_plugin: str | None = None
+    """The planner's name if it is not the package's (a plug-in's, or the object's class)."""
+    controller_plugin: str | None = None
+    """The controller's name if it is not the package's."""
+
+    @property
+    def builtin(self) -> Configuration | None:
+        """The built-in configuration the run used; None for a plug-in."""
+        name = self.configuration
+        return Configuration(name) if name in CONFIGURATION_NAMES else None
 
     @property
     def label(self) -> str:
-        """The configuration's legend text."""
-        return self.configuration.label
+        """The configuration's legend text (a plug-in's: its name)."""
+        builtin = self.builtin
+        return builtin.label if builtin is not None else self.configuration
 
     @property
     def lane_width_m(self) -> float:

@@ -27,13 +27,13 @@ only with a posterior (F, F-safe). The target is the posterior mean, but never a
 local estimate guarantees on the surface it measured (``μ_l − m_l``, carried over the camera's
 class under the vehicle; :func:`mufusion.fusion.local_surface_bound`): the mean follows the
 local value itself, and trusting that beyond its declared error over-estimated by up to ``m_l``
-(docs/experiments.md, "Lane recovery trusts a measurement within its declared error").
+(docs/decisions/0043, "Lane recovery trusts a measurement within its declared error").
 The ``α`` adopted is held: the next step plans with it first and searches upwards from it if
 that plan leaves the lane; if it keeps the lane, one step less is tried, and adopted if it keeps
 the lane too. Without the hold each step started from the
 unrelaxed μ̂, and since its one RTI iteration rarely kept the lane where the relaxed plans of
 the steps before had, the loop flipped between them and never settled on a relaxed plan
-(docs/experiments.md, "Lane recovery holds its relaxation"). Evading (the lane is left by
+(docs/decisions/0040, "Lane recovery holds its relaxation"). Evading (the lane is left by
 design), nothing is held. The footprint's corners are checked, not the reference
 point alone: on a curve and yawed against the lane the corners reach up to the body's swing and
 bulge further out, and a plan whose reference point stays within its bounds can still carry
@@ -57,7 +57,7 @@ the loop looks for a stop in lane, in this order:
 
 Both apply only before an evasion has started: a stop that fits only once the vehicle is turning
 away comes late, and switching mid-manoeuvre is worse than either (measured:
-docs/experiments.md, "F-safe's lane in the pop-up").
+docs/decisions/0027, "F-safe's lane in the pop-up").
 
 **Braking when the evasion is futile** (``brake_when_futile``). Evading, lane recovery ranks a
 candidate predicted to hit an obstacle (:func:`planned_obstacle_clearance_m`) after every one
@@ -94,7 +94,7 @@ class ProbingSettings:
     # each axle, that is 0.5 μ g of deceleration. The ceiling covers the highest friction the
     # camera's classes declare (dry, 0.8 ± 0.2: 4.9 m/s² on μ 1.0); the ramp's 10 m/s³ reaches it
     # in 0.5 s, and the probe ends at the first planning step that sees the estimate. A ceiling of
-    # 3 m/s² never measured on μ 0.9 (docs/experiments.md, "A probe that measures on dry roads").
+    # 3 m/s² never measured on μ 0.9 (docs/decisions/0045, "A probe that measures on dry roads").
     max_decel_mps2: float = 5.0
     ramp_s: float = 0.5
     max_duration_s: float = 0.8

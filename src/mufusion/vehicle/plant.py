@@ -46,6 +46,11 @@ from mufusion.vehicle.plant_state import (
     initial_state,
     state_vector,
 )
+from mufusion.vehicle.slip_control import (
+    SlipControlSettings,
+    SlipControlStatus,
+    WheelSlipController,
+)
 from mufusion.vehicle.surface_tires import SurfaceTireTable, tire_for_surface
 
 __all__ = [
@@ -86,6 +91,8 @@ class PlantOutput:
     rear: AxleOutput
     accel_x_mps2: float
     accel_y_mps2: float
+    slip_control: SlipControlStatus | None = None
+    """What the wheel-slip controller (ABS, TCS) did in this step; ``None`` without one."""
 
     @property
     def speed_mps(self) -> float:
@@ -260,6 +267,10 @@ class Plant:
     kernel
         ``"auto"`` (default): the compiled kernel where the install built it, else the Python
         one; ``"compiled"`` or ``"python"`` to choose (same results, bit for bit).
+    slip_control
+        ``None`` (default): the torque commands reach the wheels as they are. Settings: a
+        :class:`~mufusion.vehicle.slip_control.WheelSlipController` (ABS, TCS) modulates them
+        at every step, as on a production vehicle; its status is in ``PlantOutput.slip_control``.
 
     Raises
     ------
@@ -289,6 +300,7 @@ class Plant:
         dt_s: float = DEFAULT_DT_S,
         surface_tires: SurfaceTireTable | None = None,
         kernel: str = "auto",
+        slip_control: SlipControlSettings | None = None,
     ) -> None:
         if not (0.0 < dt_s <= DEFAULT_DT_S + 1e-12):
             raise ValueError(f"dt_s must be in (0, {DEFAULT_DT_S}] s, got {dt_s!r}")
@@ -302,6 +314,14 @@ class Plant:
         self._x = state_vector(x0)
         self.time_s = 0.0
         self._kernel = make_kernel(params, self.dt_s, kernel)
+        if slip_control is not None and not isinstance(slip_control, SlipControlSettings):
+            raise ValueError(
+                f"slip_control must be SlipControlSettings or None, got {type(slip_control)!r}"
+            )
+        self._slip_control = None if slip_control is None else WheelSlipController(
+            params, slip_control, self.dt_s, float(self._x.vx_mps)
+        )
+        self._accel_x_mps2 = 0.0  # the last step's longitudinal acceleration (the IMU's)
         # (μ_f, μ_r, tire_f, tire_r, axles) of the latest output, reused by the next step's
         # first stage.
         self._last_axles: (
@@ -345,6 +365,12 @@ class Plant:
         cmd = _command_tuple(command, p)
         x0 = self._x
         omega_f0, omega_r0 = x0.omega_front_radps, x0.omega_rear_radps
+        slip_status = None
+        if self._slip_control is not None:
+            cmd, slip_status = self._slip_control.modulate(
+                cmd, omega_f0, omega_r0, self._accel_x_mps2, x0.torque_front_nm,
+                x0.torque_rear_nm, self.time_s,
+            )
         # The surface under each axle is held over the step (μ is too).
         tire_f = tire_for_surface(mu_front, p.tire, self.surface_tires)
         tire_r = tire_for_surface(mu_rear, p.tire, self.surface_tires)
@@ -369,11 +395,14 @@ class Plant:
         )
         front, rear = AxleOutput(*axles[0], mu_front), AxleOutput(*axles[1], mu_rear)
         m = p.mass_kg
+        accel_x = (front.fx_n * cos_d - front.fy_n * sin_d + rear.fx_n) / m
+        self._accel_x_mps2 = accel_x
         return PlantOutput(
             x=np.asarray(x1),
             time_s=self.time_s,
             front=front,
             rear=rear,
-            accel_x_mps2=(front.fx_n * cos_d - front.fy_n * sin_d + rear.fx_n) / m,
+            accel_x_mps2=accel_x,
             accel_y_mps2=(front.fx_n * sin_d + front.fy_n * cos_d + rear.fy_n) / m,
+            slip_control=slip_status,
         )

@@ -1,0 +1,330 @@
+"""Wheel-slip control between the controller's torque commands and the wheels: ABS and TCS.
+
+Every production car and truck brakes and drives through a wheel-slip controller: a wheel whose
+brake torque exceeds what the road returns locks, and a locked wheel has no lateral grip. This
+module is that controller, part of the vehicle (it runs inside
+:class:`~mufusion.vehicle.plant.Plant` at the plant's rate, 200 Hz, a wheel-speed sample every
+5 ms as on production units) and blind to the road: it reads the wheel-speed signal, the
+longitudinal IMU acceleration and the torque the actuator applies, never μ.
+
+The scheme is the classical rule-based one (Bosch's ABS; Savaresi & Tanelli, *Active Braking
+Control Systems Design for Vehicles*, ch. 2; Rajamani, *Vehicle Dynamics and Control*, ch. 14),
+per axle, in four phases:
+
+``PASS``
+    The command goes through. Incipient lock is detected when the wheel's slip against the
+    reference speed passes ``release_slip``, or passes ``onset_slip`` while the wheel decelerates
+    faster than the body by ``wheel_accel_margin_mps2`` (past the force peak the wheel runs away
+    towards lock; before it, the slip settles).
+``RELEASE``
+    The brake torque is dumped (commanded to zero; the actuator's lag sets how fast it falls)
+    until the wheel re-accelerates relative to the body.
+``HOLD``
+    The torque reached is held while the wheel spins up, until its slip is back within
+    ``recovered_slip`` (or ``max_hold_s`` has passed).
+``REAPPLY``
+    The torque builds up again from what was held, towards the torque at which the wheel began to
+    lock and beyond, over ``reapply_time_s``; the cycle ends when the command is reached (back to
+    ``PASS``), or a new one starts when the wheel runs away again.
+
+Traction control is the same machine on drive torque with the signs mirrored (a spinning wheel
+instead of a locking one). The reference speed is the front wheel's while nothing brakes (neither
+preset drives its front axle, so it rolls freely), else the IMU's acceleration integrated and never
+below the fastest wheel: the usual estimate on a rear-driven vehicle.
+
+The phases and thresholds act on the vehicle's own signals only, so a run whose wheels never come
+near their force peak is unchanged by the controller (bit for bit: it passes the command through).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from enum import IntEnum
+
+from mufusion.vehicle.params import VehicleParams
+
+
+class SlipPhase(IntEnum):
+    """Phase of one axle's slip controller (see the module docstring)."""
+
+    PASS = 0
+    RELEASE = 1
+    HOLD = 2
+    REAPPLY = 3
+
+
+@dataclass(frozen=True)
+class SlipControlSettings:
+    """ABS and TCS switches and thresholds (slips as ratios, accelerations in m/s²).
+
+    Attributes
+    ----------
+    abs_enabled, tcs_enabled
+        Anti-lock braking and traction control on (the default, as on every production vehicle)
+        or off (to show what they do).
+    onset_slip
+        Slip beyond which a wheel decelerating faster than the body (by
+        ``wheel_accel_margin_mps2``) is taken to be locking [-], in (0, 0.5).
+    release_slip
+        Slip beyond which the brake is released whatever the wheel's acceleration [-], in
+        (onset_slip, 1).
+    wheel_accel_margin_mps2
+        How much faster than the body a wheel's circumference must decelerate (brake) or
+        accelerate (drive) to count as running away [m/s²], > 0.
+    recovered_slip
+        Slip below which a released wheel has spun up again [-], in (0, onset_slip].
+    max_hold_s
+        Longest hold before the torque builds up again [s], > 0.
+    reapply_fraction
+        Share of the torque at which the wheel began to lock that the build-up starts from
+        (or the held torque, if higher) [-], in (0, 1].
+    reapply_time_s
+        Time in which the torque then builds by the torque at which the wheel began to lock
+        [s], > 0; it keeps rising at that rate until the command is reached or the wheel runs
+        away again.
+    min_speed_mps
+        Below this reference speed the controller passes the command through (the brakes hold a
+        stopped vehicle) [m/s], ≥ 0.
+    """
+
+    abs_enabled: bool = True
+    tcs_enabled: bool = True
+    onset_slip: float = 0.12
+    release_slip: float = 0.25
+    wheel_accel_margin_mps2: float = 10.0
+    recovered_slip: float = 0.05
+    max_hold_s: float = 0.3
+    reapply_fraction: float = 0.7
+    reapply_time_s: float = 0.3
+    min_speed_mps: float = 2.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.type in (bool, "bool"):
+                if not isinstance(value, bool):
+                    raise ValueError(f"{f.name} must be true or false, got {value!r}")
+            elif isinstance(value, bool) or not (
+                isinstance(value, (int, float)) and math.isfinite(value)
+            ):
+                raise ValueError(f"{f.name} must be a finite number, got {value!r}")
+        if not 0.0 < self.onset_slip < 0.5:
+            raise ValueError(f"onset_slip must be in (0, 0.5), got {self.onset_slip!r}")
+        if not self.onset_slip < self.release_slip < 1.0:
+            raise ValueError(
+                f"release_slip must be in (onset_slip = {self.onset_slip}, 1), "
+                f"got {self.release_slip!r}")
+        if not 0.0 < self.recovered_slip <= self.onset_slip:
+            raise ValueError(
+                f"recovered_slip must be in (0, onset_slip = {self.onset_slip}], "
+                f"got {self.recovered_slip!r}")
+        if not 0.0 < self.reapply_fraction <= 1.0:
+            raise ValueError(
+                f"reapply_fraction must be in (0, 1], got {self.reapply_fraction!r}")
+        for name in ("wheel_accel_margin_mps2", "max_hold_s", "reapply_time_s"):
+            if not getattr(self, name) > 0.0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        if not self.min_speed_mps >= 0.0:
+            raise ValueError(f"min_speed_mps must be >= 0 m/s, got {self.min_speed_mps!r}")
+
+
+@dataclass(frozen=True)
+class AxleSlipStatus:
+    """What one axle's slip controller did in the step just taken.
+
+    ``phase`` is its phase after the step; ``torque_removed_nm`` ≥ 0 how much torque it withheld
+    from the command (brake or drive) [N m]; ``slip`` the slip it measured against
+    ``SlipControlStatus.reference_speed_mps`` [-].
+    """
+
+    phase: SlipPhase
+    torque_removed_nm: float
+    slip: float
+
+    @property
+    def active(self) -> bool:
+        """Whether the controller modulates this axle's torque (any phase but ``PASS``)."""
+        return self.phase is not SlipPhase.PASS
+
+
+@dataclass(frozen=True)
+class SlipControlStatus:
+    """Both axles' slip controllers after one plant step, and the cycles they have run so far."""
+
+    front: AxleSlipStatus
+    rear: AxleSlipStatus
+    reference_speed_mps: float
+    cycles_front: int
+    cycles_rear: int
+
+
+PASSIVE_AXLE = AxleSlipStatus(SlipPhase.PASS, 0.0, 0.0)
+
+
+class _AxleMachine:
+    """One axle's phase machine on torque magnitudes (brake or drive, signs taken off)."""
+
+    __slots__ = ("cycles", "held", "lock", "phase", "settings", "since")
+
+    def __init__(self, settings: SlipControlSettings) -> None:
+        self.settings = settings
+        self.phase = SlipPhase.PASS
+        self.lock = 0.0  # torque at which the wheel began to run away [N m]
+        self.held = 0.0  # torque the current hold or reapply starts from [N m]
+        self.since = 0.0  # when the current phase began [s]
+        self.cycles = 0
+
+    def reset(self) -> None:
+        self.phase = SlipPhase.PASS
+
+    def step(self, t: float, asked: float, applied: float, excess: float, runaway: float) -> float:
+        """Torque magnitude to command [N m].
+
+        ``asked``: the command's magnitude; ``applied``: the actuator's torque magnitude now;
+        ``excess``: the slip in the command's direction (braking: −λ); ``runaway``: how much
+        faster than the body the wheel's circumference moves in that direction [m/s²].
+        """
+        cfg = self.settings
+        phase = self.phase
+        if phase is SlipPhase.RELEASE:
+            # Dump until the wheel clearly spins up again (or its slip has recovered already).
+            if runaway < -cfg.wheel_accel_margin_mps2 or excess < cfg.recovered_slip:
+                self.phase, self.since, self.held = SlipPhase.HOLD, t, applied
+                return min(applied, asked)
+            return 0.0
+        if phase is SlipPhase.HOLD:
+            if excess > cfg.release_slip and runaway > 0.0:
+                return self._release(t, applied)  # it locks again while held
+            if excess < cfg.recovered_slip or t - self.since >= cfg.max_hold_s:
+                self.phase, self.since = SlipPhase.REAPPLY, t
+            return min(self.held, asked)
+        if excess > cfg.release_slip or (
+            excess > cfg.onset_slip and runaway > cfg.wheel_accel_margin_mps2
+        ):
+            return self._release(t, applied)
+        if phase is SlipPhase.PASS:
+            return asked
+        # Straight back to a share of the torque that locked the wheel (the peak lies below it,
+        # not far), then slowly on towards and past it.
+        start = max(self.held, cfg.reapply_fraction * self.lock)
+        cap = start + (t - self.since) * self.lock / cfg.reapply_time_s
+        if cap >= asked:
+            self.phase = SlipPhase.PASS
+            return asked
+        return cap
+
+    def _release(self, t: float, applied: float) -> float:
+        """A new cycle: remember the torque that was too much, and dump it."""
+        self.phase, self.since, self.cycles = SlipPhase.RELEASE, t, self.cycles + 1
+        self.lock = max(applied, 1e-3)
+        return 0.0
+
+
+class WheelSlipController:
+    """ABS and TCS for one vehicle, stepped once per plant step (see the module docstring).
+
+    Parameters
+    ----------
+    params
+        Vehicle parameters (wheel radius).
+    settings
+        Switches and thresholds.
+    dt_s
+        The plant's step [s], > 0 (the wheel-speed sampling period).
+    initial_speed_mps
+        Reference speed before the first step [m/s] (the vehicle's initial speed).
+
+    Examples
+    --------
+    >>> from mufusion.vehicle.params import CAR
+    >>> abs_ = WheelSlipController(CAR, SlipControlSettings(), 0.005, 15.0)
+    >>> free = 15.0 / CAR.wheel_radius_m
+    >>> cmd, status = abs_.modulate((0.0, -800.0, -500.0), free, free, 0.0, -800.0, -500.0, 0.0)
+    >>> cmd, status.front.active
+    ((0.0, -800.0, -500.0), False)
+    """
+
+    def __init__(
+        self,
+        params: VehicleParams,
+        settings: SlipControlSettings,
+        dt_s: float,
+        initial_speed_mps: float,
+    ) -> None:
+        if not (math.isfinite(dt_s) and dt_s > 0.0):
+            raise ValueError(f"dt_s must be > 0 s, got {dt_s!r}")
+        self.params, self.settings, self.dt_s = params, settings, float(dt_s)
+        self.reference_speed_mps = max(float(initial_speed_mps), 0.0)
+        self._time_s = 0.0
+        self._previous_wheel_mps: tuple[float, float] | None = None
+        self._front = _AxleMachine(settings)
+        self._rear = _AxleMachine(settings)
+
+    def modulate(
+        self,
+        command: tuple[float, float, float],
+        omega_front_radps: float,
+        omega_rear_radps: float,
+        accel_x_mps2: float,
+        torque_front_nm: float,
+        torque_rear_nm: float,
+        time_s: float,
+    ) -> tuple[tuple[float, float, float], SlipControlStatus]:
+        """The command the wheels get in the coming plant step, and what was done to it.
+
+        Parameters
+        ----------
+        command
+            ``(steer_rad, torque_front_nm, torque_rear_nm)`` from the controller, clipped.
+        omega_front_radps, omega_rear_radps
+            Wheel speeds now (the wheel-speed sensors).
+        accel_x_mps2
+            Longitudinal body acceleration of the last step (the IMU) [m/s²].
+        torque_front_nm, torque_rear_nm
+            Torques the actuators apply now [N m] (brake pressure, drive torque).
+        time_s
+            The plant's clock [s].
+        """
+        radius, dt, cfg = self.params.wheel_radius_m, self.dt_s, self.settings
+        steer, asked_f, asked_r = command
+        wheel_f, wheel_r = radius * omega_front_radps, radius * omega_rear_radps
+        braking = asked_f < 0.0 or asked_r < 0.0 or torque_front_nm < 0.0 or torque_rear_nm < 0.0
+        if braking:
+            predicted = self.reference_speed_mps + accel_x_mps2 * dt
+            reference = max(predicted, wheel_f, wheel_r)
+        else:
+            reference = wheel_f  # the undriven front wheel rolls freely
+        self.reference_speed_mps = reference
+        previous = self._previous_wheel_mps
+        self._previous_wheel_mps = (wheel_f, wheel_r)
+        if previous is None or reference < cfg.min_speed_mps:
+            self._front.reset()
+            self._rear.reset()
+            return command, self._status(PASSIVE_AXLE, PASSIVE_AXLE)
+        denominator = max(reference, 1.0)
+        out = []
+        statuses = []
+        for machine, asked, applied, wheel, before in (
+            (self._front, asked_f, torque_front_nm, wheel_f, previous[0]),
+            (self._rear, asked_r, torque_rear_nm, wheel_r, previous[1]),
+        ):
+            slip = (wheel - reference) / denominator
+            relative_accel = (wheel - before) / dt - accel_x_mps2
+            if asked < 0.0 and cfg.abs_enabled:
+                magnitude = machine.step(time_s, -asked, max(-applied, 0.0), -slip,
+                                         -relative_accel)
+                torque = -magnitude
+            elif asked > 0.0 and cfg.tcs_enabled:
+                magnitude = machine.step(time_s, asked, max(applied, 0.0), slip, relative_accel)
+                torque = magnitude
+            else:
+                machine.reset()
+                torque = asked
+            out.append(torque)
+            statuses.append(AxleSlipStatus(machine.phase, abs(asked - torque), slip))
+        return (steer, out[0], out[1]), self._status(statuses[0], statuses[1])
+
+    def _status(self, front: AxleSlipStatus, rear: AxleSlipStatus) -> SlipControlStatus:
+        return SlipControlStatus(front, rear, self.reference_speed_mps, self._front.cycles,
+                                 self._rear.cycles)

@@ -1,0 +1,148 @@
+"""Wheel-slip control (ABS, TCS): locked wheels without it, rolling wheels with it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mufusion.metrics.run_metrics import LOCKED_SLIP, ONE_ABS_CYCLE_S, _longest_run_s
+from mufusion.vehicle.actuators import ActuatorCommand
+from mufusion.vehicle.params import CAR, GRAVITY_MPS2, TRUCK, VehicleParams
+from mufusion.vehicle.plant import Plant, PlantState, initial_state
+from mufusion.vehicle.slip_control import SlipControlSettings, SlipPhase
+
+
+def _brake(params: VehicleParams, mu: float, steer_rad: float, slip_control, *, speed=20.0,
+           duration_s=8.0, fraction=1.0):
+    """Full brake torque (or ``fraction`` of it) from ``speed``; per-step records until rest."""
+    plant = Plant(params, initial_state(params, 0.0, 0.0, 0.0, speed), slip_control=slip_control)
+    command = ActuatorCommand(steer_rad, -fraction * params.max_brake_torque_front_nm,
+                              -fraction * params.max_brake_torque_rear_nm)
+    rows = []
+    for _ in range(round(duration_s / plant.dt_s)):
+        out = plant.step(command, mu, mu)
+        locked = min(out.front.slip_ratio, out.rear.slip_ratio) <= LOCKED_SLIP
+        rows.append((out.time_s, float(out.x[PlantState.X]), out.speed_mps,
+                     locked and out.speed_mps > 2.0, abs(out.front.fy_n), out.slip_control))
+        if out.speed_mps < 0.3:
+            break
+    return rows
+
+
+@pytest.mark.parametrize("params", [CAR, TRUCK], ids=["car", "truck"])
+@pytest.mark.parametrize("mu", [0.3, 0.8])
+def test_abs_keeps_the_wheels_rolling_and_restores_lateral_force(params, mu) -> None:
+    steer = 0.02
+    without = _brake(params, mu, steer, None)
+    with_abs = _brake(params, mu, steer, SlipControlSettings())
+    dt = with_abs[1][0] - with_abs[0][0]
+    lock_without = _longest_run_s(np.array([r[3] for r in without]), dt)
+    lock_with = _longest_run_s(np.array([r[3] for r in with_abs]), dt)
+    # Without slip control the full brake torque locks both axles for the rest of the stop.
+    assert lock_without > 1.0
+    # With it no wheel stays locked for more than one ABS cycle ...
+    assert lock_with <= ONE_ABS_CYCLE_S
+    assert with_abs[-1][5].cycles_front + with_abs[-1][5].cycles_rear >= 2
+    # ... and the steered front axle gives lateral force again (a locked tire gives none).
+    fy_without = np.mean([r[4] for r in without[:200]])
+    fy_with = np.mean([r[4] for r in with_abs[:200]])
+    assert fy_with > 3.0 * fy_without
+
+
+@pytest.mark.parametrize("params", [CAR, TRUCK], ids=["car", "truck"])
+@pytest.mark.parametrize("mu", [0.3, 0.5, 0.9])
+def test_abs_stops_straight_near_the_friction_limit(params, mu) -> None:
+    rows = _brake(params, mu, 0.0, SlipControlSettings(), speed=20.0, duration_s=15.0)
+    locked = _brake(params, mu, 0.0, None, speed=20.0, duration_s=15.0)
+    ideal = 20.0**2 / (2.0 * mu * GRAVITY_MPS2)
+    assert rows[-1][2] < 0.3 and locked[-1][2] < 0.3  # both stopped
+    # Sliding tires return 58-68 % of the peak: the locked stop is far longer, the ABS stop is
+    # within 30 % of v²/2μg (brake lag and the release phases included; measured 1.07-1.26,
+    # the truck's pneumatic brakes on μ 0.3 the longest, as conventional truck ABS is).
+    assert rows[-1][1] < 1.3 * ideal
+    assert rows[-1][1] < 0.85 * locked[-1][1]
+
+
+@pytest.mark.parametrize("params", [CAR, TRUCK], ids=["car", "truck"])
+def test_slip_control_passes_a_braking_within_the_tires_peak_through_unchanged(params) -> None:
+    # 30 % of the brake torque at μ 0.9 stays well below the tires' force peak: the controller
+    # must not touch the command (the published grids rely on this).
+    plain = _brake(params, 0.9, 0.01, None, fraction=0.1, duration_s=2.0)
+    controlled = _brake(params, 0.9, 0.01, SlipControlSettings(), fraction=0.1, duration_s=2.0)
+    assert [r[:5] for r in plain] == [r[:5] for r in controlled]
+    assert all(r[5].front.phase is SlipPhase.PASS and r[5].rear.phase is SlipPhase.PASS
+               for r in controlled)
+
+
+@pytest.mark.parametrize("params", [CAR, TRUCK], ids=["car", "truck"])
+def test_traction_control_limits_wheel_spin(params) -> None:
+    def launch(slip_control):
+        plant = Plant(params, initial_state(params, 0.0, 0.0, 0.0, 5.0),
+                      slip_control=slip_control)
+        slips = []
+        for _ in range(400):
+            out = plant.step(ActuatorCommand(0.0, 0.0, params.max_drive_torque_nm), 0.2, 0.2)
+            slips.append(out.rear.slip_ratio)
+        return np.array(slips), out.speed_mps
+
+    spin, speed_spin = launch(None)
+    held, speed_held = launch(SlipControlSettings())
+    assert spin[-100:].min() > 0.5  # the driven wheel spins freely without it
+    assert np.median(held[100:]) < 0.2
+    assert speed_held > speed_spin  # a gripping tire drives harder than a spinning one
+
+
+def test_abs_can_be_switched_off_alone() -> None:
+    rows = _brake(CAR, 0.3, 0.0, SlipControlSettings(abs_enabled=False), duration_s=2.0)
+    assert _longest_run_s(np.array([r[3] for r in rows]), 0.005) > 1.0
+    assert all(r[5].front.phase is SlipPhase.PASS for r in rows)
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [
+        ("onset_slip", 0.0, "onset_slip must be in"),
+        ("release_slip", 0.01, "release_slip must be in"),
+        ("recovered_slip", 0.3, "recovered_slip must be in"),
+        ("max_hold_s", -1.0, "max_hold_s must be > 0"),
+        ("wheel_accel_margin_mps2", math.nan, "wheel_accel_margin_mps2 must be a finite"),
+        ("abs_enabled", 1, "abs_enabled must be true or false"),
+        ("min_speed_mps", -0.5, "min_speed_mps must be >= 0"),
+    ],
+)
+def test_settings_name_the_field_out_of_range(field, value, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        SlipControlSettings(**{field: value})
+
+
+def test_longest_lock_counts_consecutive_ticks() -> None:
+    flags = np.array([0, 1, 1, 0, 1, 1, 1, 0, 1], dtype=bool)
+    assert _longest_run_s(flags, 0.02) == pytest.approx(0.06)
+    assert _longest_run_s(np.zeros(5, dtype=bool), 0.02) == 0.0
+
+
+def test_the_run_summary_says_whether_a_lock_outlasted_one_abs_cycle() -> None:
+    import pandas as pd
+
+    from mufusion.metrics.run_metrics import _wheels
+
+    tick = 0.02
+    n = 40
+    slip = np.zeros(n)
+    slip[5:5 + round(ONE_ABS_CYCLE_S / tick) + 3] = -1.0  # locked a little over one cycle
+    ts = pd.DataFrame({
+        "speed_mps": np.full(n, 10.0), "wheel_slip_front": slip, "wheel_slip_rear": np.zeros(n),
+        "slip_control_front": slip < -0.5, "slip_control_rear": np.zeros(n, dtype=bool),
+        "slip_cycles": np.arange(n) // 10,
+    })
+    out = _wheels(ts, tick)
+    assert out["wheel_lock_max_s"] == pytest.approx(ONE_ABS_CYCLE_S + 3 * tick)
+    assert out["wheel_lock_within_abs_cycle"] is False
+    assert out["slip_control_cycles"] == 3
+    # Below 2 m/s a stopped wheel is no lock (the brakes hold the vehicle).
+    out = _wheels(ts.assign(speed_mps=1.0), tick)
+    assert out["wheel_lock_max_s"] == 0.0 and out["wheel_lock_within_abs_cycle"] is True
+    # A record from before wheel slips were logged: nothing to say.
+    assert _wheels(ts.assign(wheel_slip_front=np.nan, wheel_slip_rear=np.nan), tick) == {}
