@@ -27,8 +27,8 @@ POPUP_GRID = EXAMPLES / "limits_popup_general.toml"
 # grid's hairpins on 150 m run 26 s; the first 12 s hold the approach, the friction change and
 # the curve's entry, where the published failures happen). Pop-up runs keep the grid's duration.
 TURN_DURATION_CAP_S = 12.0
-TURN_DRAWS = 16
-POPUP_DRAWS = 12
+TURN_DRAWS = 24
+POPUP_DRAWS = 16
 
 
 @cache
