@@ -8,11 +8,13 @@ the inner edge at the apex and back, which turns in earlier). Along a line the p
 the acceleration ``λ μ(s) g`` in any direction (λ: the planner's utilisation factor), so its
 speed is bounded by ``v² κ(s) ≤ λ μ(s) g`` and, before a tighter point, by braking with what the
 lateral demand leaves: ``a_x = √((λμg)² − (v²κ)²)``.
-A backward pass from the curve's end gives the highest speed ``v_max(s)`` from which every later
-limit can still be met (each step braking with what the lateral demand at its faster end
-leaves); a first-order actuator lag τ is a dead time τ at the entry speed before braking starts
-(its exact response brakes ``a τ²/2`` more: the dead time is conservative).
-Derivation and figures: ``docs/feasibility.md``.
+A backward pass from the curve's end (:mod:`~mufusion.scenarios.feasibility.profile`: exact on
+straights and arcs, stepped on clothoids) gives the highest speed ``v_max(s)`` from which every
+later limit can still be met; μ(s) is the road's along the lane centre, the lower under the two
+axles, with the change point mapped onto each line, so a change before, at or inside the curve,
+a drop or a rise, is one profile. A first-order actuator lag τ is a dead time τ at the entry
+speed before braking starts (its exact response brakes ``a τ²/2`` more: the dead time is
+conservative). Derivation and figures: ``docs/feasibility.md``.
 """
 
 from __future__ import annotations
