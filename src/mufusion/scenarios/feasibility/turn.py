@@ -58,9 +58,10 @@ class TurnLimit:
     limit_speed_mps
         ``√(λ μ g R)`` at the tightest point, with that point's μ [m/s].
     limit_distance_m
-        Distance from the vehicle's start to where that limit first applies [m]: the arc's start
-        (the end of the entry clothoid) for the centreline and the outer line, the circle's start
-        for the cut.
+        Distance along the line from the vehicle's start to where that limit first applies [m]:
+        the arc's start (the end of the entry clothoid) for the centreline and the outer line,
+        the circle's start for the cut; where the friction drops inside the curve, the point at
+        which the front axle meets the drop.
     max_entry_speed_mps
         Highest entry speed from which the limit is met, dead time included [m/s].
     braking_distance_m
