@@ -3,9 +3,10 @@
 For each campaign output directory (``mufusion campaign FILE --out DIR``) and each oracle class:
 how many variants, how many GT runs left the lane (with the summed and the largest footprint
 excursion) or hit the obstacle, and how many F-safe runs left the lane or hit the obstacle where
-GT of the same variant did not. Every variant is classified again with the oracle of the code
-that runs this script (not the class stored at run time), so a "before" and an "after" campaign
-are split by the same verdicts.
+GT of the same variant did not, and (where the runs record it) how many GT runs kept a wheel
+locked longer than one ABS cycle and GT's summed slip-control activity [s]. Every variant is
+classified again with the oracle of the code that runs this script (not the class stored at run
+time), so a "before" and an "after" campaign are split by the same verdicts.
 
 Run: ``python benchmarks/limit_grid_outcomes.py DIR [DIR ...] [--by vehicle]``. Prints a Markdown
 table per directory and a final JSON line; numbers go to docs/feasibility.md ("The general
@@ -61,6 +62,9 @@ def outcomes(directory: Path, by: str | None = None) -> dict[str, dict[str, floa
             total["gt_excursion_m"] += m["max_lane_excursion_m"]
             total["gt_max_m"] = max(total["gt_max_m"], m["max_lane_excursion_m"])
         count["gt_collisions"] += bool(m["collision"])
+        # Slip-control activity, where the runs record it (absent before it existed).
+        count["gt_lock_beyond_abs_cycle"] += m.get("wheel_lock_within_abs_cycle") is False
+        total["gt_slip_control_active_s"] += m.get("slip_control_active_s") or 0.0
         fsafe = configs.get("F-safe")
         if fsafe is not None:
             f = fsafe["metrics"]
@@ -77,7 +81,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     results = {}
     columns = ("variants", "gt_out", "gt_excursion_m", "gt_max_m", "gt_collisions",
-               "fsafe_out_where_gt_in", "fsafe_hit_where_gt_clear")
+               "fsafe_out_where_gt_in", "fsafe_hit_where_gt_clear", "gt_lock_beyond_abs_cycle",
+               "gt_slip_control_active_s")
     for directory in args.directories:
         table = outcomes(directory, args.by)
         results[str(directory)] = table
