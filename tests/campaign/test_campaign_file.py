@@ -182,3 +182,45 @@ def test_a_controller_plugin_reaches_every_run_and_its_stored_spec(tmp_path):
     specs = campaign_specs(load_campaign(_write(tmp_path, f'{text}controller = "{spec}"\n')))
     assert [s.controller for s in specs] == [spec, spec] and specs[0].planner is None
     assert spec_record(specs[0])["controller"] == spec
+
+
+def test_a_zipped_axis_takes_its_values_together(tmp_path):
+    text = ('scenarios = ["turn"]\nconfigs = ["GT"]\n[grid]\nvehicle = ["truck", "car"]\n'
+            '"friction.mu_before, friction.mu_turn" = [[0.9, 0.3], [0.3, 0.9]]')
+    specs = campaign_specs(load_campaign(_write(tmp_path, text)))
+    assert len(specs) == 2 * 2  # the product over axes, not over keys (that would be 8)
+    pairs = {(dict(s.grid)["friction.mu_before"], dict(s.grid)["friction.mu_turn"])
+             for s in specs}
+    assert pairs == {(0.9, 0.3), (0.3, 0.9)}
+    # Every key is its own grid column and override, so each run has the pair it was given.
+    for spec in specs:
+        cfg = load_scenario(spec.scenario, list(spec.overrides))
+        assert (cfg.friction.mu_before, cfg.friction.mu_turn) in pairs
+        assert [k for k, _ in spec.grid] == ["vehicle", "friction.mu_before", "friction.mu_turn"]
+
+
+@pytest.mark.parametrize(
+    ("grid", "match"),
+    [
+        ('"friction.mu, initial_speed_mps" = [[0.5]]', r"must be a list of 2 values"),
+        ('"friction.mu, initial_speed_mps" = [0.5]', r"must be a list of 2 values"),
+        ('"friction.mu" = [[0.5, 10.0]]', "only a zipped axis"),
+        ('"friction.mu, initial_speed_mps" = [[[0.5], 10.0]]',
+         r"grid\.friction\.mu, initial_speed_mps\.0"),  # pydantic: a value is no list
+        ('"friction.mu, friction.mu" = [[0.5, 0.6]]', "'friction.mu' is listed more"),
+        ('"friction.mu," = [[0.5, 0.6]]', "empty key"),
+        ('"friction.mu" = [0.5]\n"initial_speed_mps, friction.mu" = [[10.0, 0.6]]',
+         "'friction.mu' is listed more"),
+        ('"friction.mu, initial_speed_mps" = [[0.5, 10.0], [0.5, 10]]', "listed more than once"),
+    ],
+)
+def test_bad_zipped_axes_name_the_axis(tmp_path, grid, match):
+    with pytest.raises(ValueError, match=match):
+        load_campaign(_write(tmp_path, f'scenarios = ["popup"]\n[grid]\n{grid}'))
+
+
+def test_a_zipped_key_fixed_in_overrides_is_rejected(tmp_path):
+    text = ('scenarios = ["popup"]\noverrides = ["initial_speed_mps=12"]\n[grid]\n'
+            '"friction.mu, initial_speed_mps" = [[0.5, 10.0]]')
+    with pytest.raises(ValueError, match="grid key 'initial_speed_mps' is also set in overrides"):
+        load_campaign(_write(tmp_path, text))

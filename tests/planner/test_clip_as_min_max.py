@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from mufusion.configurations.sources import MU_HAT_MAX, MU_HAT_MIN
+from mufusion.configurations.interface import MU_HAT_MAX, MU_HAT_MIN
 from mufusion.planner.ocp import MAX_SWING_HEADING_RAD, MU_MAX, MU_MIN
 
 BOUNDS = [(MU_MIN, MU_MAX), (-MAX_SWING_HEADING_RAD, MAX_SWING_HEADING_RAD), (0.05, 2.0),

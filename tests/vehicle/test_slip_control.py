@@ -121,3 +121,28 @@ def test_longest_lock_counts_consecutive_ticks() -> None:
     flags = np.array([0, 1, 1, 0, 1, 1, 1, 0, 1], dtype=bool)
     assert _longest_run_s(flags, 0.02) == pytest.approx(0.06)
     assert _longest_run_s(np.zeros(5, dtype=bool), 0.02) == 0.0
+
+
+def test_the_run_summary_says_whether_a_lock_outlasted_one_abs_cycle() -> None:
+    import pandas as pd
+
+    from mufusion.metrics.run_metrics import _wheels
+
+    tick = 0.02
+    n = 40
+    slip = np.zeros(n)
+    slip[5:5 + round(ONE_ABS_CYCLE_S / tick) + 3] = -1.0  # locked a little over one cycle
+    ts = pd.DataFrame({
+        "speed_mps": np.full(n, 10.0), "wheel_slip_front": slip, "wheel_slip_rear": np.zeros(n),
+        "slip_control_front": slip < -0.5, "slip_control_rear": np.zeros(n, dtype=bool),
+        "slip_cycles": np.arange(n) // 10,
+    })
+    out = _wheels(ts, tick)
+    assert out["wheel_lock_max_s"] == pytest.approx(ONE_ABS_CYCLE_S + 3 * tick)
+    assert out["wheel_lock_within_abs_cycle"] is False
+    assert out["slip_control_cycles"] == 3
+    # Below 2 m/s a stopped wheel is no lock (the brakes hold the vehicle).
+    out = _wheels(ts.assign(speed_mps=1.0), tick)
+    assert out["wheel_lock_max_s"] == 0.0 and out["wheel_lock_within_abs_cycle"] is True
+    # A record from before wheel slips were logged: nothing to say.
+    assert _wheels(ts.assign(wheel_slip_front=np.nan, wheel_slip_rear=np.nan), tick) == {}

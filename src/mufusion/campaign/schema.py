@@ -31,7 +31,21 @@ Engine = Literal["pool", "ray"]
 ENGINES: tuple[str, ...] = get_args(Engine)
 
 GridValue = bool | int | float | str
-"""A value of one grid axis, as TOML gives it."""
+"""A value of one grid key, as TOML gives it."""
+
+GridEntry = GridValue | list[GridValue]
+"""One value of a grid axis: a scalar, or on a zipped axis one value per key."""
+
+
+def axis_keys(axis: str) -> tuple[str, ...]:
+    """The scenario keys a grid axis sets: one, or several joined by commas (a zipped axis).
+
+    Examples
+    --------
+    >>> axis_keys(" friction.mu_before, friction.mu_turn ")
+    ('friction.mu_before', 'friction.mu_turn')
+    """
+    return tuple(part.strip() for part in axis.split(","))
 
 MAX_SEEDS = 100_000
 
@@ -50,6 +64,9 @@ class CampaignFile(BaseModel):
         [grid]                                # every combination becomes one variant
         "friction.mu" = [0.7, 0.8, 0.9, 1.0]
         "obstacle.distance_m" = [18.0, 22.0]
+        # A zipped axis: keys joined by commas take their values together, one list per value
+        # (a drop and a rise, never the constant-friction pairs a product would add).
+        "friction.mu_before, friction.mu_turn" = [[0.9, 0.3], [0.3, 0.9]]
 
     With ``seeds = N`` every variant runs with the scenario's ``seed`` field set to
     ``s0, s0 + 1, …, s0 + N − 1``, ``s0`` being the seed the scenario (after ``overrides`` and the
@@ -62,7 +79,7 @@ class CampaignFile(BaseModel):
     scenarios: list[str] = Field(min_length=1)
     configs: list[str] = Field(default_factory=lambda: list(CONFIGURATION_NAMES), min_length=1)
     overrides: list[str] = Field(default_factory=list)
-    grid: dict[str, list[GridValue]] = Field(default_factory=dict)
+    grid: dict[str, list[GridEntry]] = Field(default_factory=dict)
     seeds: Annotated[int, Field(ge=1, le=MAX_SEEDS)] | None = None
     planner: str | None = None
     """A planner plug-in for every run (``module:Class`` or an entry point); None: the package's."""
@@ -104,32 +121,62 @@ class CampaignFile(BaseModel):
 
     @field_validator("grid")
     @classmethod
-    def _distinct_grid_values(cls, v: dict[str, list[GridValue]]) -> dict[str, list[GridValue]]:
+    def _distinct_grid_values(cls, v: dict[str, list[GridEntry]]) -> dict[str, list[GridEntry]]:
         empty = [k for k, values in v.items() if not values]
         if empty:
             raise ValueError(f"grid axes {empty} have no values")
-        _reject_repeats("grid keys", [k.strip() for k in v])
-        for key, values in v.items():
+        all_keys = [key for axis in v for key in axis_keys(axis)]
+        if any(not key for key in all_keys):
+            raise ValueError(f"grid axes {[a for a in v if '' in axis_keys(a)]} have an empty key")
+        _reject_repeats("grid keys", all_keys)
+        for axis, values in v.items():
+            width = len(axis_keys(axis))
             # bool is an int in Python; keep True apart from 1 (they are different TOML values).
-            seen: set[tuple[bool, GridValue]] = set()
+            seen: set[tuple[tuple[bool, GridValue], ...]] = set()
             for value in values:
-                tag = (isinstance(value, bool), value)
+                tag = tuple((isinstance(x, bool), x) for x in _entry_values(axis, width, value))
                 if tag in seen:
-                    raise ValueError(f"grid {key!r}: value {value!r} is listed more than once")
+                    raise ValueError(f"grid {axis!r}: value {value!r} is listed more than once")
                 seen.add(tag)
         return v
+
+    def axes(self) -> list[tuple[tuple[str, ...], list[tuple[GridValue, ...]]]]:
+        """The grid's axes in file order: the keys each sets and its values (one tuple each).
+
+        Examples
+        --------
+        >>> c = CampaignFile(scenarios=["turn"], grid={"vehicle": ["car"], "a, b": [[1, 2]]})
+        >>> c.axes()
+        [(('vehicle',), [('car',)]), (('a', 'b'), [(1, 2)])]
+        """
+        return [(axis_keys(axis), [_entry_values(axis, len(axis_keys(axis)), value)
+                                   for value in values])
+                for axis, values in self.grid.items()]
 
     @model_validator(mode="after")
     def _grid_keys_not_fixed_elsewhere(self) -> CampaignFile:
         fixed = {_key_of(item) for item in self.overrides}
-        for key in self.grid:
-            if key.strip() in fixed:
+        for key in (k for axis in self.grid for k in axis_keys(axis)):
+            if key in fixed:
                 raise ValueError(
                     f"grid key {key!r} is also set in overrides; keep it in one place"
                 )
-            if key.strip() == "seed" and self.seeds is not None:
+            if key == "seed" and self.seeds is not None:
                 raise ValueError("grid key 'seed' and seeds = N both set the seed; use one")
         return self
+
+
+def _entry_values(axis: str, width: int, value: GridEntry) -> tuple[GridValue, ...]:
+    """A grid value as one value per key of its axis; raises ValueError naming the axis."""
+    if width == 1:
+        if isinstance(value, list):
+            raise ValueError(f"grid {axis!r}: value {value!r} is a list; only a zipped axis "
+                             "(keys joined by commas) takes lists")
+        return (value,)
+    if not isinstance(value, list) or len(value) != width:
+        raise ValueError(f"grid {axis!r}: value {value!r} must be a list of {width} values, "
+                         f"one per key")
+    return tuple(value)
 
 
 def _key_of(override: str) -> str:

@@ -159,13 +159,18 @@ def campaign_specs(
     """
     if shards < 1 or not 0 <= shard < shards:
         raise ValueError(f"shard must be in [0, shards) with shards >= 1, got {shard}/{shards}")
-    keys = list(campaign.grid)
-    points = list(itertools.product(*(campaign.grid[k] for k in keys))) or [()]
+    axes = campaign.axes()
+    points = list(itertools.product(*(values for _, values in axes))) or [()]
     specs: list[RunSpec] = []
     variant_index = 0
     for scenario in campaign.scenarios:
         for point in points:
-            grid = tuple((k.strip(), v) for k, v in zip(keys, point, strict=True))
+            # A zipped axis contributes one (key, value) pair per key: one column each.
+            grid = tuple(
+                pair
+                for (keys, _), values in zip(axes, point, strict=True)
+                for pair in zip(keys, values, strict=True)
+            )
             overrides = (*campaign.overrides, *(f"{k}={_toml_value(v)}" for k, v in grid))
             cfg = load_scenario(scenario, list(overrides))  # fail before anything runs
             seeds: list[int | None] = (

@@ -92,6 +92,9 @@ class RunMetrics:
         :data:`LOCKED_SLIP` at a speed above :data:`SLIP_MIN_SPEED_MPS` (0 if never; ``None`` in
         records written before wheel slips were logged). With slip control on it stays within
         one ABS cycle (:data:`ONE_ABS_CYCLE_S`).
+    wheel_lock_within_abs_cycle
+        ``wheel_lock_max_s`` ≤ :data:`ONE_ABS_CYCLE_S`: no wheel stayed locked for longer than
+        one ABS cycle (``None`` in records written before wheel slips were logged).
     slip_control_cycles
         Cycles the vehicle's wheel-slip control (ABS, TCS) ran, both axles.
     slip_control_active_s
@@ -141,13 +144,9 @@ class RunMetrics:
     start_lateral_offset_m: float | None = None
     start_heading_error_rad: float | None = None
     wheel_lock_max_s: float | None = None
+    wheel_lock_within_abs_cycle: bool | None = None
     slip_control_cycles: int = 0
     slip_control_active_s: float = 0.0
-
-    @property
-    def wheel_lock_within_one_abs_cycle(self) -> bool:
-        """No wheel stayed locked for longer than one ABS cycle (true for an old record)."""
-        return self.wheel_lock_max_s is None or self.wheel_lock_max_s <= ONE_ABS_CYCLE_S
 
     def to_dict(self) -> dict[str, Any]:
         return {k: _clean(v) for k, v in asdict(self).items()}
@@ -294,8 +293,10 @@ def _wheels(ts: pd.DataFrame, tick_s: float) -> dict[str, Any]:
         | (ts["wheel_slip_rear"].to_numpy(dtype=float) <= LOCKED_SLIP)
     )
     active = ts["slip_control_front"].astype(bool) | ts["slip_control_rear"].astype(bool)
+    longest = _longest_run_s(locked, tick_s)
     return {
-        "wheel_lock_max_s": _longest_run_s(locked, tick_s),
+        "wheel_lock_max_s": longest,
+        "wheel_lock_within_abs_cycle": longest <= ONE_ABS_CYCLE_S,
         "slip_control_cycles": int(ts["slip_cycles"].iloc[-1]),
         "slip_control_active_s": float(active.sum() * tick_s),
     }

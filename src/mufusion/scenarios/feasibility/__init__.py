@@ -1,8 +1,9 @@
 """Physics feasibility oracle: can a point mass on the true friction do what a scenario asks?
 
 Planner-independent pure functions over plain numbers (SI units in every name):
-:func:`turn_feasibility` (slow from the entry speed to the curve's limit speed ``√(λ μ g R)``
-before the curve, along the lane centre and cutting the curve within the lane's play) and
+:func:`turn_feasibility` (the friction-limited speed profile of a point mass through the curve,
+``v² κ ≤ λ μ(s) g``, with the friction changing before, at or inside it, along the lane centre
+and along the lines the lane's play allows) and
 :func:`popup_feasibility` (stop short of the obstacle, or steer around it). Each returns a frozen
 dataclass with a :class:`FeasibilityClass`, a signed margin in m/s (the highest entry speed at
 which the manoeuvre still fits, minus the entry speed) and the quantities used.
@@ -63,7 +64,8 @@ def classify_scenario(
     """The oracle's verdict on one scenario variant.
 
     Dead times are the vehicle's actuator time constants (brakes: ``torque_time_constant_s``,
-    steering: ``steer_time_constant_s``); the brake limit is the wheel-torque capacity; the
+    steering: ``steer_time_constant_s``); the brake limit is the wheel-torque capacity; a turn's
+    friction is the lower under the two axles (``cog_to_front_axle_m``, ``cog_to_rear_axle_m``); the
     evasion keeps the planner's obstacle margin and may use the whole road (ego and opposing
     lane), as the pop-up planner does.
 
@@ -86,6 +88,8 @@ def classify_scenario(
             utilization_factor=lam, dead_time_s=params.torque_time_constant_s,
             lane_width_m=cfg.road.lane_width_m, vehicle_width_m=params.width_m,
             vehicle_length_m=params.length_m, max_decel_mps2=max_decel,
+            front_axle_ahead_m=params.cog_to_front_axle_m,
+            rear_axle_behind_m=params.cog_to_rear_axle_m,
         )
     ob = cfg.obstacle
     lane, half_w = cfg.road.lane_width_m, 0.5 * params.width_m

@@ -8,18 +8,18 @@ the inner edge at the apex and back, which turns in earlier). Along a line the p
 the acceleration ``λ μ(s) g`` in any direction (λ: the planner's utilisation factor), so its
 speed is bounded by ``v² κ(s) ≤ λ μ(s) g`` and, before a tighter point, by braking with what the
 lateral demand leaves: ``a_x = √((λμg)² − (v²κ)²)``.
-A backward pass from the curve's end gives the highest speed ``v_max(s)`` from which every later
-limit can still be met (each step braking with what the lateral demand at its faster end
-leaves); a first-order actuator lag τ is a dead time τ at the entry speed before braking starts
-(its exact response brakes ``a τ²/2`` more: the dead time is conservative).
-Derivation and figures: ``docs/feasibility.md``.
+A backward pass from the curve's end (:mod:`~mufusion.scenarios.feasibility.profile`: exact on
+straights and arcs, stepped on clothoids) gives the highest speed ``v_max(s)`` from which every
+later limit can still be met; μ(s) is the road's along the lane centre, the lower under the two
+axles, with the change point mapped onto each line, so a change before, at or inside the curve,
+a drop or a rise, is one profile. A first-order actuator lag τ is a dead time τ at the entry
+speed before braking starts (its exact response brakes ``a τ²/2`` more: the dead time is
+conservative). Derivation and figures: ``docs/feasibility.md``.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -33,10 +33,15 @@ from mufusion.scenarios.feasibility.common import (
     require_fraction,
     require_positive,
 )
-
-# Step of the backward pass on curved pieces [m]; it takes the larger curvature of each step, so
-# the profile errs on the slow side by O(step) (1 cm/s at 16 m/s on the clothoids tested).
-PROFILE_STEP_M = 0.05
+from mufusion.scenarios.feasibility.profile import (
+    FrictionOfS,
+    Piece,
+    axle_span_friction,
+    backward_profile,
+    line_position_m,
+    lowest_friction,
+    max_entry_speed_mps,
+)
 
 
 @dataclass(frozen=True)
@@ -53,9 +58,10 @@ class TurnLimit:
     limit_speed_mps
         ``√(λ μ g R)`` at the tightest point, with that point's μ [m/s].
     limit_distance_m
-        Distance from the vehicle's start to where that limit first applies [m]: the arc's start
-        (the end of the entry clothoid) for the centreline and the outer line, the circle's start
-        for the cut.
+        Distance along the line from the vehicle's start to where that limit first applies [m]:
+        the arc's start (the end of the entry clothoid) for the centreline and the outer line,
+        the circle's start for the cut; where the friction drops inside the curve, the point at
+        which the front axle meets the drop.
     max_entry_speed_mps
         Highest entry speed from which the limit is met, dead time included [m/s].
     braking_distance_m
@@ -146,82 +152,14 @@ def effective_radius_m(
     )
 
 
-def _profile(
-    pieces: list[tuple[float, float, float]], mu_of: Callable[[float], float], lam: float,
-    max_decel_mps2: float, change_m: float,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Backward pass over ``pieces`` (length, κ_start, κ_end): grid s, v_max², limit v² per node."""
-    steps: list[tuple[float, float, float, float]] = []  # (s_a, s_b, κ_a, κ_b)
-    start = 0.0
-    for length, k0, k1 in pieces:
-        n = 1 if k0 == k1 == 0.0 else max(1, math.ceil(length / PROFILE_STEP_M))
-        for i in range(n):
-            a, b = start + length * i / n, start + length * (i + 1) / n
-            ka, kb = k0 + (k1 - k0) * i / n, k0 + (k1 - k0) * (i + 1) / n
-            if a < change_m < b:  # split the step at the friction change
-                kc = ka + (kb - ka) * (change_m - a) / (b - a)
-                steps += [(a, change_m, ka, kc), (change_m, b, kc, kb)]
-            else:
-                steps.append((a, b, ka, kb))
-        start += length
-    nodes = [steps[0][0]] + [step[1] for step in steps]
-    step_k = [max(step[2], step[3]) for step in steps]
-    # A node's curvature is the larger of its two steps' ends (a curvature jump counts at once).
-    ends = [steps[0][2], *[step[3] for step in steps]]
-    starts = [*[step[2] for step in steps], steps[-1][3]]
-    curv = [max(a, b) for a, b in zip(ends, starts, strict=True)]
-    s = np.asarray(nodes)
-    # μ on the step (s_i, s_i+1) is its midpoint's; a node takes the lower of its two steps.
-    mu_step = [mu_of(0.5 * (a + b)) for a, b in itertools.pairwise(nodes)]
-    mu_node = [min(a, b) for a, b in zip([mu_step[0], *mu_step], [*mu_step, mu_step[-1]],
-                                         strict=True)]
-    limit = [lam * m * GRAVITY_MPS2 / k if k > 0.0 else math.inf
-             for m, k in zip(mu_node, curv, strict=True)]
-    u = [0.0] * len(nodes)
-    u[-1] = limit[-1]
-    for i in range(len(nodes) - 2, -1, -1):
-        a_total = lam * mu_step[i] * GRAVITY_MPS2
-        u[i] = min(limit[i], _braking_step(u[i + 1], a_total, step_k[i],
-                                           nodes[i + 1] - nodes[i], max_decel_mps2))
-    return s, np.asarray(u), np.asarray(limit)
-
-
-def _braking_step(u_end: float, a_total: float, kappa: float, ds: float,
-                  max_decel_mps2: float) -> float:
-    """v² at a step's start from ``u_end`` = v² at its end, braking with what the lateral demand
-    at the start (the faster end) leaves: ``w = u_end + 2 ds √(a² − (w κ)²)``.
-
-    Implicit in ``w``: the explicit form (the lateral demand at the slower end) is not monotone
-    in ``u_end`` near the limit, so more friction further on could lower v_max by ~1e-5 m/s;
-    this one is (``w`` rises with ``u_end``) and errs slow.
-    """
-    if kappa <= 0.0:
-        return u_end + 2.0 * min(a_total, max_decel_mps2) * ds
-    if u_end * kappa >= a_total:
-        return u_end  # no braking left at the end's lateral demand
-    # (w − u)² = 4 ds² (a² − w² κ²), root w ≥ u.
-    c = (2.0 * ds * kappa) ** 2
-    disc = 4.0 * ds * ds * (a_total * a_total * (1.0 + c) - (kappa * u_end) ** 2)
-    w = (u_end + math.sqrt(disc)) / (1.0 + c)
-    return min(w, u_end + 2.0 * max_decel_mps2 * ds)
-
-
 def _assess(
-    path: Literal["centreline", "outer", "cut"], radius_m: float,
-    pieces: list[tuple[float, float, float]], mu_of: Callable[[float], float], change_m: float,
-    entry_speed_mps: float, lam: float, dead_time_s: float, max_decel_mps2: float,
+    path: Literal["centreline", "outer", "cut"], radius_m: float, pieces: list[Piece],
+    mu_of: FrictionOfS, breakpoints: tuple[float, ...], entry_speed_mps: float, lam: float,
+    dead_time_s: float, max_decel_mps2: float,
 ) -> TurnLimit:
-    s, u, limit = _profile(pieces, mu_of, lam, max_decel_mps2, change_m)
+    s, u, limit = backward_profile(pieces, mu_of, breakpoints, lam, max_decel_mps2)
     reach = np.minimum.accumulate(u)  # v² allowed for cruising from the start up to s
-
-    def cruise_ok(v: float) -> bool:
-        return v * v <= float(np.interp(v * dead_time_s, s, reach))
-
-    lo, hi = 0.0, math.sqrt(u[0])
-    for _ in range(60):  # bisection on a monotone predicate: 1e-18 of the bracket
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if cruise_ok(mid) else (lo, mid)
-    v_max = lo
+    v_max = max_entry_speed_mps(s, reach, dead_time_s, math.sqrt(u[0]))
     tight = int(np.argmin(limit))
     v0 = entry_speed_mps
     d_t = v0 * dead_time_s
@@ -263,6 +201,8 @@ def turn_feasibility(
     vehicle_width_m: float,
     vehicle_length_m: float,
     max_decel_mps2: float = math.inf,
+    front_axle_ahead_m: float = 0.0,
+    rear_axle_behind_m: float = 0.0,
 ) -> TurnFeasibility:
     """Whether a point mass can slow from ``entry_speed_mps`` to the curve's limit in time.
 
@@ -289,6 +229,10 @@ def turn_feasibility(
         less the footprint's bulge ``length²/(8R)`` in the curve.
     max_decel_mps2
         Deceleration the brakes can give [m/s²] (default: no limit beyond friction).
+    front_axle_ahead_m, rear_axle_behind_m
+        Distances of the front and the rear axle from the centre of gravity [m], ≥ 0 (default
+        0: a point at the centre of gravity). The point mass has the lower μ under its two
+        axles, so a drop acts when the front axle reaches it, a rise once the rear has passed.
 
     Returns
     -------
@@ -316,7 +260,8 @@ def turn_feasibility(
     for name, value in checks.items():
         require_positive(name, value)
     for name, value in (("turn_start_ahead_m", turn_start_ahead_m), ("clothoid_m", clothoid_m),
-                        ("dead_time_s", dead_time_s)):
+                        ("dead_time_s", dead_time_s), ("front_axle_ahead_m", front_axle_ahead_m),
+                        ("rear_axle_behind_m", rear_axle_behind_m)):
         require_positive(name, value, allow_zero=True)
     require_fraction("utilization_factor", utilization_factor)
     if not (math.isfinite(turn_angle_rad) and 0.0 < turn_angle_rad <= math.pi):
@@ -334,40 +279,60 @@ def turn_feasibility(
         raise ValueError(f"clothoid_m must be <= radius_m * turn_angle_rad = "
                          f"{radius_m * turn_angle_rad:.3f} m, got {clothoid_m!r}")
 
-    def mu_of(s_m: float) -> float:
-        return mu_before if s_m < friction_change_ahead_m else mu_turn
-
     play = 0.5 * (lane_width_m - vehicle_width_m)
     play_outer = play - vehicle_length_m**2 / (8.0 * radius_m)
     shift, tangent_offset = clothoid_offsets_m(radius_m, clothoid_m)
-    common = dict(change_m=friction_change_ahead_m, entry_speed_mps=entry_speed_mps,
-                  lam=utilization_factor, dead_time_s=dead_time_s, max_decel_mps2=max_decel_mps2)
 
-    def line(radius: float) -> list[tuple[float, float, float]]:
+    def assess_line(path: Literal["centreline", "outer", "cut"], radius: float,
+                    pieces: list[Piece], mu_of: FrictionOfS,
+                    points: tuple[float, ...]) -> TurnLimit:
+        return _assess(path, radius, pieces, mu_of, points, entry_speed_mps,
+                       utilization_factor, dead_time_s, max_decel_mps2)
+
+    def friction_on(pieces: list[Piece]) -> tuple[FrictionOfS, tuple[float, ...]]:
+        # The road's change point moved onto the line (later on a line outside the centre).
+        change = line_position_m(pieces, friction_change_ahead_m)
+        return axle_span_friction(mu_before, mu_turn, change, front_axle_ahead_m,
+                                  rear_axle_behind_m)
+
+    def line(radius: float) -> list[Piece]:
         k = 1.0 / radius
-        pieces = [(turn_start_ahead_m, 0.0, 0.0), (clothoid_m, 0.0, k), (radius * arc_angle, k, k),
-                  (clothoid_m, k, 0.0)]
-        return [p for p in pieces if p[0] > 0.0]
+        pieces = [Piece(turn_start_ahead_m, 0.0, 0.0, turn_start_ahead_m),
+                  Piece(clothoid_m, 0.0, k, clothoid_m),
+                  Piece(radius * arc_angle, k, k, radius_m * arc_angle),
+                  Piece(clothoid_m, k, 0.0, clothoid_m)]
+        return [p for p in pieces if p.length_m > 0.0]
+
+    def assess(path: Literal["centreline", "outer"], radius: float) -> TurnLimit:
+        pieces = line(radius)
+        return assess_line(path, radius, pieces, *friction_on(pieces))
 
     r_cut = effective_radius_m(radius_m, turn_angle_rad, play, play_outer, shift)
     cut_offset = (play + play_outer + shift) / (1.0 - math.cos(0.5 * turn_angle_rad))
-    cut_start = max(turn_start_ahead_m + tangent_offset
-                    - cut_offset * math.sin(0.5 * turn_angle_rad), 0.0)
+    # The circle leaves the entry straight this far before the curve and, the curve being
+    # symmetric, joins the exit straight as far beyond its end.
+    cut_lead = cut_offset * math.sin(0.5 * turn_angle_rad) - tangent_offset
+    cut_start = max(turn_start_ahead_m - cut_lead, 0.0)
     curve_end = turn_start_ahead_m + 2.0 * clothoid_m + radius_m * arc_angle
-    # On the cut circle μ is the lowest the road has from the circle's start to the curve's end.
-    mu_cut = min(mu_of(cut_start), mu_of(max(curve_end - 1e-9, cut_start)))
+    centre_pieces = line(radius_m)
+    mu_centre, points = friction_on(centre_pieces)
+    # On the cut circle μ is the lowest the road has under the vehicle along the circle's span.
+    mu_circle = lowest_friction(mu_centre, cut_start, max(curve_end + cut_lead, cut_start),
+                                points)
 
     def mu_cut_of(s_m: float) -> float:
-        return mu_of(s_m) if s_m < cut_start else mu_cut
+        return mu_centre(s_m) if s_m < cut_start else mu_circle
 
-    cut_pieces = [(cut_start, 0.0, 0.0), (r_cut * turn_angle_rad, 1.0 / r_cut, 1.0 / r_cut)]
+    cut_pieces = [Piece(cut_start, 0.0, 0.0, cut_start),
+                  Piece(r_cut * turn_angle_rad, 1.0 / r_cut, 1.0 / r_cut,
+                        curve_end + cut_lead - cut_start)]
     if play_outer < 0.0:  # the footprint does not fit the curve even on the centreline
         centreline = with_play = _unfit(entry_speed_mps, radius_m)
     else:
-        centreline = _assess("centreline", radius_m, line(radius_m), mu_of, **common)
-        r_outer = radius_m + play_outer
-        outer = _assess("outer", r_outer, line(r_outer), mu_of, **common)
-        cut = _assess("cut", r_cut, [p for p in cut_pieces if p[0] > 0.0], mu_cut_of, **common)
+        centreline = assess("centreline", radius_m)
+        outer = assess("outer", radius_m + play_outer)
+        cut = assess_line("cut", r_cut, [p for p in cut_pieces if p.length_m > 0.0],
+                          mu_cut_of, (*points, cut_start))
         # The cut circle turns in earlier: for curves of more than 2·atan(1/2) ≈ 53° that costs a
         # braking-limited entry more than its larger radius gains (docs/feasibility.md).
         with_play = max(centreline, outer, cut, key=lambda limit: limit.max_entry_speed_mps)
