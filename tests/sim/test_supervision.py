@@ -9,9 +9,15 @@ from mufusion.configurations import FrictionEstimate
 from mufusion.fusion import FusedEstimate, assemble_inputs
 from mufusion.metrics import compute_metrics
 from mufusion.scenarios import load_scenario
-from mufusion.scenarios.runner import run_scenario
+from mufusion.scenarios.runner import build_loop, run_loop, run_scenario
+from mufusion.sim.events import EventKind
+from mufusion.sim.lane_recovery import RecoveryOutcome
+from mufusion.sim.log import RunLog
+from mufusion.sim.loop import ClosedLoop
+from mufusion.sim.stop_in_lane import StopProbeEnd
 from mufusion.sim.supervision import (
     LaneRecoverySettings,
+    ProbeEndReason,
     Prober,
     ProbingSettings,
     planned_footprint_violation_m,
@@ -33,6 +39,17 @@ def _estimate(mu_hat: float = 0.1, mean: float = 0.3, local: bool = False, fused
 
 def _curve_ahead(start_m: float = 20.0, radius_m: float = 28.0) -> np.ndarray:
     return np.where(GRID >= start_m, -1.0 / radius_m, 0.0)
+
+
+def _run(scenario: str, overrides: list[str], config: str) -> tuple[RunLog, ClosedLoop]:
+    """A run's log, and its loop: what the supervisors did, as they record it."""
+    cfg = load_scenario(scenario, overrides)
+    loop = build_loop(cfg, friction=config)
+    return run_loop(loop, cfg.duration_s), loop
+
+
+def _events(log: RunLog, kind: EventKind):
+    return log.events[log.events["kind"] == kind]
 
 
 def _prober(**settings) -> Prober:
@@ -72,9 +89,9 @@ def test_probe_is_bounded_and_cools_down() -> None:
     assert prober.decel_mps2(1.15) == pytest.approx(1.5)
     assert prober.decel_mps2(1.5) == pytest.approx(3.0)
     assert prober.reason_to_stop(1.3, 11.5, local_available=False) is None
-    assert prober.reason_to_stop(1.3, 11.5, local_available=True) == "local estimate available"
-    assert prober.reason_to_stop(1.6, 11.5, False) == "longest probe reached"
-    assert prober.reason_to_stop(1.2, 9.9, False) == "largest speed loss reached"
+    assert prober.reason_to_stop(1.3, 11.5, local_available=True) is ProbeEndReason.MEASURED
+    assert prober.reason_to_stop(1.6, 11.5, False) is ProbeEndReason.LONGEST
+    assert prober.reason_to_stop(1.2, 9.9, False) is ProbeEndReason.SPEED_LOSS
     assert prober.stop(1.4, 11.2) == pytest.approx(0.8)
     # The local estimate is stale again, but a new probe waits for the cool-down.
     assert prober.reason_to_probe(2.0, 11.2, _estimate(), _curve_ahead(), False) is None
@@ -185,31 +202,28 @@ def caution_runs():
         "probing": ["lane_recovery.enabled=false"],
         "both": [],
     }
-    return {k: run_scenario(load_scenario("turn", [*base, *v]), "F-safe")
-            for k, v in variants.items()}
+    return {k: _run("turn", [*base, *v], "F-safe") for k, v in variants.items()}
 
 
 @pytest.mark.slow
 def test_caution_alone_drives_off_and_lane_recovery_keeps_the_lane(caution_runs) -> None:
-    neither = compute_metrics(caution_runs["neither"])
-    both = compute_metrics(caution_runs["both"])
+    neither = compute_metrics(caution_runs["neither"][0])
+    both = compute_metrics(caution_runs["both"][0])
     # Without probing and lane recovery F-safe leaves the lane (by over 1 m before the vehicle
     # had ABS; 0.94 m with it, docs/decisions/0052); with both it keeps it.
     assert neither.max_lane_excursion_m > 0.5
     assert both.max_lane_excursion_m == 0.0 and not both.minimal_risk
-    events = caution_runs["both"].events
-    assert (events["kind"] == "lane_recovery").sum() >= 3
+    assert len(_events(caution_runs["both"][0], EventKind.LANE_RECOVERY)) >= 3
 
 
 @pytest.mark.slow
 def test_probing_is_logged_bounded_and_makes_the_local_estimate_available(caution_runs) -> None:
-    log = caution_runs["probing"]
-    ev = log.events
-    start, end = ev[ev["kind"] == "probe_start"], ev[ev["kind"] == "probe_end"]
+    log, loop = caution_runs["probing"]
+    start, end = _events(log, EventKind.PROBE_START), _events(log, EventKind.PROBE_END)
     assert len(start) == 1 and len(end) == 1
     duration = float(end["t_s"].iloc[0] - start["t_s"].iloc[0])
     assert 0.0 < duration <= 0.6 + 1e-9
-    assert "local estimate available" in end["detail"].iloc[0]
+    assert [e.reason for e in loop.supervision.probing.ends] == [ProbeEndReason.MEASURED]
     ts = log.timeseries
     probing = ts[ts["control_mode"] == "probing"]
     assert len(probing) >= 2
@@ -224,7 +238,7 @@ def test_probing_is_logged_bounded_and_makes_the_local_estimate_available(cautio
         available = planning_steps[planning_steps["local_available"].astype(bool)]
         return float(available["t_s"].min()) if len(available) else float("inf")
 
-    quiet = caution_runs["neither"].planning_steps
+    quiet = caution_runs["neither"][0].planning_steps
     assert first_available_s(steps) + 0.3 <= first_available_s(quiet)
 
 
@@ -252,44 +266,39 @@ def test_a_probe_on_a_dry_road_measures_the_friction() -> None:
     # The truck 40 m before a curve on μ 0.9 at 18 m/s: F-safe's μ̂ (the dry class minimum)
     # cannot take the curve at this speed, so it probes. With a 3 m/s² ceiling the probe ended
     # at its time limit in all 64 such runs of examples/limits_perturbed.toml, unmeasured.
-    log = run_scenario(load_scenario("turn", [
+    log, loop = _run("turn", [
         "vehicle=truck", "initial_speed_mps=18", "friction.mu_turn=0.9",
-        "turn.start_ahead_m=40", "turn.clothoid_m=0", "duration_s=1.0"]), "F-safe")
-    ev = log.events
-    start, end = ev[ev["kind"] == "probe_start"], ev[ev["kind"] == "probe_end"]
+        "turn.start_ahead_m=40", "turn.clothoid_m=0", "duration_s=1.0"], "F-safe")
+    start, end = _events(log, EventKind.PROBE_START), _events(log, EventKind.PROBE_END)
     assert len(start) == 1 and len(end) == 1
-    assert end["detail"].iloc[0].startswith("local estimate available")
-    lost = float(end["detail"].iloc[0].split("; ")[1].split(" m/s")[0])
-    assert 0.0 < lost <= ProbingSettings().max_speed_loss_mps
+    (probe,) = loop.supervision.probing.ends
+    assert probe.reason is ProbeEndReason.MEASURED and probe.t_s == float(end["t_s"].iloc[0])
+    assert 0.0 < probe.speed_lost_mps <= ProbingSettings().max_speed_loss_mps
     steps = log.planning_steps
     assert steps[steps["t_s"] <= float(end["t_s"].iloc[0])]["local_available"].astype(bool).any()
 
 
 @pytest.mark.slow
-def test_after_lane_recovery_the_planner_continues_the_adopted_plan(monkeypatch) -> None:
+def test_after_lane_recovery_the_planner_continues_the_adopted_plan() -> None:
     # The pop-up's evasion plans leave the road band and trigger recovery at most steps of the
     # first second; where relaxing does not help, the friction-limited plan is adopted after
     # four candidates. The next step must continue (shift, and take its front force from) the
     # plan the controller tracks, not the last candidate tried.
-    from mufusion.sim.loop import ClosedLoop
-
-    original = ClosedLoop._planning_step
+    cfg = load_scenario("popup", ["duration_s=1.0"])
+    loop = build_loop(cfg, friction="F")
     mismatches: list[float] = []
     adopted: list[float] = []
 
-    def checked(self, step, t, xf, utilization, previous):
-        estimate, plan = original(self, step, t, xf, utilization, previous)
+    def checked(t: float) -> None:  # after each planning step, loop.plan is the one adopted
         adopted.append(t)
-        if plan is not None and self.planner.last_plan is not plan:
+        if loop.plan is not None and loop.planner.last_plan is not loop.plan:
             mismatches.append(t)
-        return estimate, plan
 
-    monkeypatch.setattr(ClosedLoop, "_planning_step", checked)
-    log = run_scenario(load_scenario("popup", ["duration_s=1.0"]), "F")
-    details = log.events[log.events["kind"] == "lane_recovery"]["detail"]
+    run_loop(loop, cfg.duration_s, progress=checked)
+    outcomes = [r.outcome for r in loop.supervision.lane_recovery.recoveries]
     # Both kinds of outcome occur: a relaxed candidate adopted, and none (the first plan kept).
-    assert details.str.contains("did not help").sum() >= 3
-    assert details.str.contains("relaxed").sum() >= 1
+    assert outcomes.count(RecoveryOutcome.DID_NOT_HELP) >= 3
+    assert outcomes.count(RecoveryOutcome.RELAXED) >= 1
     assert len(adopted) >= 10 and mismatches == []
 
 
@@ -316,15 +325,15 @@ def test_evading_lane_recovery_never_prefers_a_plan_that_hits_the_obstacle() -> 
     # to hit the obstacle at every step of the first second, while its relaxed candidates pass
     # it but leave the road band by more. Ranked by the road band alone, the colliding plan was
     # kept at every step and the truck hit the obstacle at 16.2 m/s; GT passes it by 0.58 m.
-    log = run_scenario(load_scenario("popup", [
+    log, loop = _run("popup", [
         "initial_speed_mps=24", "obstacle.distance_m=35", "friction.mu=1.0",
-        "obstacle.lateral_offset_m=1.5", "duration_s=2.5"]), "F-safe")
+        "obstacle.lateral_offset_m=1.5", "duration_s=2.5"], "F-safe")
     m = compute_metrics(log)
     assert not m.collision and m.min_clearance_m > 0.0
-    details = log.events[log.events["kind"] == "lane_recovery"]["detail"]
-    first_second = log.events[(log.events["kind"] == "lane_recovery") & (log.events["t_s"] < 1.0)]
-    assert first_second["detail"].str.contains("relaxed").sum() >= 5
-    assert len(details) >= 10
+    recoveries = loop.supervision.lane_recovery.recoveries
+    relaxed = [r for r in recoveries if r.outcome is RecoveryOutcome.RELAXED and r.t_s < 1.0]
+    assert len(relaxed) >= 5
+    assert len(_events(log, EventKind.LANE_RECOVERY)) >= 10
 
 
 @pytest.mark.slow
@@ -334,17 +343,20 @@ def test_an_evasion_that_no_plausible_friction_makes_pass_turns_into_braking_in_
     # edge; swerving anyway took it 0.99 m out of its lane into the obstacle at 15.4 m/s.
     setting = ["initial_speed_mps=19", "obstacle.distance_m=18", "friction.mu=1.0",
                "obstacle.lateral_offset_m=1.5", "duration_s=2.0"]
-    braking = run_scenario(load_scenario("popup", setting), "F-safe")
+    braking, loop = _run("popup", setting, "F-safe")
     swerving = run_scenario(
         load_scenario("popup", [*setting, "lane_recovery.brake_when_futile=false"]), "F-safe")
     b, s = compute_metrics(braking), compute_metrics(swerving)
     assert b.collision and s.collision  # no plan avoids it: physics
     assert b.impact_speed_mps < s.impact_speed_mps - 1.0
     assert b.max_lane_excursion_m == 0.0 < s.max_lane_excursion_m
-    futile = braking.events[braking.events["kind"] == "futile_evasion"]
+    futile = _events(braking, EventKind.FUTILE_EVASION)
     assert len(futile) >= 1 and float(futile["t_s"].min()) == 0.0
-    assert futile["detail"].str.contains("braking in lane").all()
-    assert not swerving.events["kind"].eq("futile_evasion").any()
+    # At each such step the vehicle brakes in lane instead of the candidate evasion.
+    recoveries = loop.supervision.lane_recovery.recoveries
+    braked = [r.t_s for r in recoveries if r.outcome is RecoveryOutcome.BRAKING]
+    assert braked == list(futile["t_s"])
+    assert _events(swerving, EventKind.FUTILE_EVASION).empty
 
 
 def test_brake_when_futile_must_be_a_bool() -> None:
@@ -353,9 +365,9 @@ def test_brake_when_futile_must_be_a_bool() -> None:
 
 
 def _popup(config: str, mu: float, speed_mps: float, distance_m: float, *extra: str):
-    return run_scenario(load_scenario("popup", [
+    return _run("popup", [
         f"initial_speed_mps={speed_mps}", f"obstacle.distance_m={distance_m}", f"friction.mu={mu}",
-        "obstacle.lateral_offset_m=0.0", "duration_s=4", *extra]), config)
+        "obstacle.lateral_offset_m=0.0", "duration_s=4", *extra], config)
 
 
 @pytest.mark.slow
@@ -363,18 +375,19 @@ def test_braking_probe_earns_the_stop_in_lane_where_the_estimate_alone_evades() 
     # F-safe at 14 m/s, the obstacle 18 m ahead on dry asphalt (μ 1.0): μ̂ is the dry class's
     # lower bound (0.6), the posterior mean 0.715, and the stop needs 0.85; the band's top (0.88)
     # does not rule it out. Without the probe F-safe swerves through the opposing lane.
-    probed = _popup("F-safe", 1.0, 14.0, 18.0)
-    plain = _popup("F-safe", 1.0, 14.0, 18.0, "lane_recovery.stop_probe_s=0")
+    probed, loop = _popup("F-safe", 1.0, 14.0, 18.0)
+    plain, _ = _popup("F-safe", 1.0, 14.0, 18.0, "lane_recovery.stop_probe_s=0")
     with_probe, without = compute_metrics(probed), compute_metrics(plain)
     assert without.max_lane_excursion_m > 1.0 and not without.collision
     assert with_probe.max_lane_excursion_m == 0.0 and not with_probe.collision
     assert with_probe.final_speed_mps < 0.1
-    ev = probed.events
-    start, end = ev[ev["kind"] == "stop_probe"], ev[ev["kind"] == "stop_probe_end"]
+    start = _events(probed, EventKind.STOP_PROBE)
+    end = _events(probed, EventKind.STOP_PROBE_END)
     assert len(start) == 1 and len(end) == 1
     t0, t1 = float(start["t_s"].iloc[0]), float(end["t_s"].iloc[0])
     assert 0.0 < t1 - t0 <= 0.3 + 1e-9
-    assert "the stop fits with μ̂ relaxed" in end["detail"].iloc[0]
+    (probe,) = loop.supervision.stop_in_lane.probes
+    assert (probe.start_s, probe.end_s, probe.ended) == (t0, t1, StopProbeEnd.STOP_FITS)
     steps = probed.planning_steps.set_index("t_s")
     # The probe brakes in lane, and the local estimate it earns is in the posterior that
     # grants the stop: the mean under the vehicle rises from the camera's 0.715 towards 0.975.
@@ -383,19 +396,18 @@ def test_braking_probe_earns_the_stop_in_lane_where_the_estimate_alone_evades() 
     est = probed.estimates
     mean_here = est[est["s_ahead_m"] == 0.0].set_index("t_s")["mean"]
     assert mean_here.loc[t0] < 0.75 < 0.9 < mean_here.loc[t1]
-    assert not plain.events["kind"].isin(["stop_probe", "stop_probe_end"]).any()
+    assert not plain.events["kind"].isin([EventKind.STOP_PROBE, EventKind.STOP_PROBE_END]).any()
 
 
 @pytest.mark.slow
 def test_braking_probe_that_measures_too_little_friction_ends_in_the_evasion() -> None:
     # At 14 m/s with the obstacle 18 m ahead on μ 0.75 the measured friction does not grant
     # the stop: the probe ends within its bound and the vehicle steers around the obstacle.
-    log = _popup("F-safe", 0.75, 14.0, 18.0)
-    ev = log.events
-    start, end = ev[ev["kind"] == "stop_probe"], ev[ev["kind"] == "stop_probe_end"]
+    log, loop = _popup("F-safe", 0.75, 14.0, 18.0)
+    start, end = _events(log, EventKind.STOP_PROBE), _events(log, EventKind.STOP_PROBE_END)
     assert len(start) == 1 and len(end) == 1
     assert float(end["t_s"].iloc[0]) - float(start["t_s"].iloc[0]) <= 0.3 + 1e-9
-    assert "evading" in end["detail"].iloc[0]
+    assert [p.ended for p in loop.supervision.stop_in_lane.probes] == [StopProbeEnd.EVADING]
     steps = log.planning_steps
     after = steps[steps["t_s"] >= float(end["t_s"].iloc[0])]
     assert (after["mode"].iloc[:5] == "evade").all()
@@ -404,8 +416,8 @@ def test_braking_probe_that_measures_too_little_friction_ends_in_the_evasion() -
 
 @pytest.mark.slow
 def test_no_braking_probe_without_a_posterior() -> None:
-    log = _popup("P", 1.0, 19.0, 35.0)
-    assert not log.events["kind"].isin(["stop_probe", "stop_probe_end"]).any()
+    log, _ = _popup("P", 1.0, 19.0, 35.0)
+    assert not log.events["kind"].isin([EventKind.STOP_PROBE, EventKind.STOP_PROBE_END]).any()
 
 
 @pytest.mark.slow
@@ -415,19 +427,20 @@ def test_lane_recovery_holds_its_relaxation_and_gives_it_back_after_the_curve() 
     # must hold the relaxation it adopts through the curve (re-searching from the unrelaxed μ̂
     # each step, the loop flipped between plans and left the lane by 37 cm), then return to μ̂
     # one step of α at a time once the lane allows.
-    log = run_scenario(load_scenario("turn", [
+    log, loop = _run("turn", [
         "initial_speed_mps=18", "friction.mu_turn=0.9", "turn.start_ahead_m=5",
-        "turn.direction=left", "turn.clothoid_m=5", "vehicle=truck", "duration_s=6"]), "F-safe")
+        "turn.direction=left", "turn.clothoid_m=5", "vehicle=truck", "duration_s=6"], "F-safe")
     assert compute_metrics(log).max_lane_excursion_m < 0.1
-    details = log.events[log.events["kind"] == "lane_recovery"]["detail"]
-    assert details.str.contains("held").sum() >= 5
-    lowered = details[details.str.contains("the lane is kept")]
-    was = lowered.str.extract(r"relaxed (\d\.\d\d) .*\(was (\d\.\d\d)\)").astype(float)
+    recoveries = loop.supervision.lane_recovery.recoveries
+    eased = [r for r in recoveries if r.outcome is RecoveryOutcome.EASED]
+    # Searches that started from a held relaxation.
+    searched = [r for r in recoveries if r.outcome is not RecoveryOutcome.EASED]
+    assert sum(r.held_alpha > 0.0 for r in searched) >= 5
     steps = (0.0, *LaneRecoverySettings().steps)
     # Each step-down is one step of α, and the last returns to the unrelaxed μ̂.
-    assert len(was) >= 1
-    assert all(steps.index(b) == steps.index(a) + 1 for a, b in zip(was[0], was[1], strict=True))
-    assert was[0].iloc[-1] == 0.0
+    assert len(eased) >= 1
+    assert all(steps.index(r.held_alpha) == steps.index(r.alpha) + 1 for r in eased)
+    assert eased[-1].alpha == 0.0
     est = log.estimates
     last = est[est["t_s"] == est["t_s"].max()]
     # Back at the class's lower bound beyond the local estimate's reach (safe mode's guarantee).

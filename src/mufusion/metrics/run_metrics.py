@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mufusion.sim.events import ERROR_EVENTS, EventKind
 from mufusion.sim.log import RunLog
 
 
@@ -302,16 +303,13 @@ def _wheels(ts: pd.DataFrame, tick_s: float) -> dict[str, Any]:
     }
 
 
-# Event kinds that report an exception inside the loop (see mufusion.sim.loop).
-ERROR_EVENTS = ("friction_source_error", "planner_error", "controller_error", "loop_error")
-
-
 def _reliability(log: RunLog) -> dict[str, Any]:
     events, steps = log.events, log.planning_steps
     kinds = events["kind"].astype(str) if not events.empty else pd.Series(dtype=str)
-    mrm = events[kinds == "minimal_risk"] if not events.empty else events
+    mrm = events[kinds == EventKind.MINIMAL_RISK] if not events.empty else events
+    scheduled = kinds == EventKind.FAULT_SCHEDULED
     return {
-        "faults_injected": int((kinds == "fault_scheduled").sum()),
+        "faults_injected": int(scheduled.sum()),
         "estimate_fallbacks": (
             int(steps["estimate_source"].isin(["last_valid", "floor"]).sum())
             if not steps.empty else 0
@@ -320,11 +318,11 @@ def _reliability(log: RunLog) -> dict[str, Any]:
         "minimal_risk": bool(len(mrm)),
         "minimal_risk_at_s": float(mrm["t_s"].iloc[0]) if len(mrm) else None,
         "faults": ", ".join(
-            sorted({str(d).split(" ", 1)[0] for d in events["detail"][kinds == "fault_scheduled"]})
+            sorted({str(d).split(" ", 1)[0] for d in events["detail"][scheduled]})
         ) if not events.empty else "",
         "reactions": ", ".join(
             f"{kind}×{count}"
-            for kind, count in kinds[kinds != "fault_scheduled"].value_counts().sort_index().items()
+            for kind, count in kinds[~scheduled].value_counts().sort_index().items()
         ),
     }
 

@@ -271,11 +271,20 @@ def run_scenario(
     ``solver_messages``.
     """
     loop = build_loop(cfg, friction=configuration, planner=planner, controller=controller)
+    return run_loop(loop, cfg.duration_s, progress=progress)
+
+
+def run_loop(
+    loop: ClosedLoop, duration_s: float, *, progress: Callable[[float], None] | None = None
+) -> RunLog:
+    """Run a loop of :func:`build_loop` as :func:`run_scenario` does (its warm-up, one BLAS
+    thread, the solver's messages into the log); the loop keeps what its supervisors did
+    (:attr:`~mufusion.sim.loop.ClosedLoop.supervision`)."""
     # One BLAS thread: the fusion's small matrix products gain nothing from a thread pool, and
     # on a busy machine its spinning threads made runs several times slower.
     # The solver library's printf goes into the log, not onto the terminal (sim.solver_output).
     with _blas_controller().limit(limits=1, user_api="blas"), captured_output() as messages:
-        log = loop.run(cfg.duration_s, progress=progress, warmup_steps=WARMUP_PLANNING_STEPS)
+        log = loop.run(duration_s, progress=progress, warmup_steps=WARMUP_PLANNING_STEPS)
     log.solver_messages = messages
     return log
 

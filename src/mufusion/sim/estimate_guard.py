@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import dataclasses
 from collections import deque
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from mufusion.configurations import FrictionEstimate
 from mufusion.planner.safety import SafetySettings
+from mufusion.sim.events import EventKind, EventSink
 
 Source = str
 """``current``, ``delayed`` (an injected delay within the age limit), ``last_valid`` or
@@ -53,7 +53,7 @@ class EstimateGuard:
         self,
         grid_m: np.ndarray,
         safety: SafetySettings,
-        event: Callable[[float, str, str], None],
+        event: EventSink,
     ) -> None:
         self.grid_m = np.asarray(grid_m, dtype=float)
         self.safety = safety
@@ -99,9 +99,10 @@ class EstimateGuard:
         )
         last = self._last_valid
         if last is not None and t_s - last.t_s <= max_age + 1e-9:
-            self._event(t_s, "estimate_fallback", f"estimate {why}: last valid one used")
+            self._event(t_s, EventKind.ESTIMATE_FALLBACK, f"estimate {why}: last valid one used")
             return self.on_grid(last, s_ego_m), "last_valid", t_s - last.t_s
-        self._event(t_s, "estimate_fallback", f"estimate {why}: μ = {self.safety.mu_floor} assumed")
+        self._event(t_s, EventKind.ESTIMATE_FALLBACK,
+                    f"estimate {why}: μ = {self.safety.mu_floor} assumed")
         local = fresh if fresh is not None else (last.estimate if last is not None else None)
         floor = FrictionEstimate(
             s_m=self.grid_m,

@@ -65,6 +65,11 @@ class Fault:
     def active(self, t_s: float) -> bool:
         return self.start_s <= t_s < self.start_s + self.duration_s
 
+    def describe(self) -> str:
+        """The fault in words (the log's ``fault_scheduled`` event)."""
+        text = f"{self.kind} from {self.start_s:g} s for {self.duration_s:g} s"
+        return text + (f", delay {self.delay_s:g} s" if self.delay_s else "")
+
 
 def active_kinds(faults: Sequence[Fault], t_s: float) -> frozenset[str]:
     """The kinds of the faults active at ``t_s``."""

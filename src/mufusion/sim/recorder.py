@@ -12,6 +12,7 @@ import numpy as np
 
 from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan
+from mufusion.sim.events import EventKind
 from mufusion.sim.log import RunLog, finite_or_nan
 from mufusion.sim.records import (
     EstimateGrid,
@@ -161,9 +162,10 @@ class Recorder:
             self._plan(step, t_s, plan)
         self._estimate(step, t_s, s_ego_m, estimate)
 
-    def event(self, t_s: float, kind: str, detail: str) -> None:
+    def event(self, t_s: float, kind: EventKind, detail: str) -> None:
         """Record a fault, a reaction to one, or a change of control mode."""
-        self.log.append(Event(t_s=t_s, kind=kind, detail=detail))
+        # The kind's plain string: the log's column holds what it held before the enum.
+        self.log.append(Event(t_s=t_s, kind=EventKind(kind).value, detail=detail))
 
     def _plan(self, step: int, t_s: float, plan: Plan) -> None:
         states = np.asarray(plan.states)[:-1]

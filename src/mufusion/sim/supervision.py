@@ -66,6 +66,11 @@ of the posterior's 95 % band (:func:`plausible_estimate`), as a check only: if i
 evasion the posterior allows passes the obstacle, and the vehicle brakes in lane with the
 unrelaxed μ̂ (the planner's emergency mode) to lower the impact speed, logged as
 ``futile_evasion``. The check is made afresh at each planning step.
+
+The loop runs them as its supervisors (:class:`~mufusion.sim.supervisor.Supervisor`):
+:class:`~mufusion.sim.stop_in_lane.StopInLane`, :class:`~mufusion.sim.lane_recovery.LaneRecovery`
+(with the futile-evasion braking) and :class:`~mufusion.sim.probing.Probing`; this module holds
+their pieces.
 """
 
 from __future__ import annotations
@@ -73,6 +78,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Sequence
+from enum import StrEnum
 
 import numpy as np
 
@@ -228,6 +234,14 @@ def plausible_estimate(estimate: FrictionEstimate) -> FrictionEstimate | None:
     return dataclasses.replace(estimate, mu_hat=np.clip(np.maximum(mu_hat, top), None, MU_HAT_MAX))
 
 
+class ProbeEndReason(StrEnum):
+    """Why a friction probe ended (the value opens the ``probe_end`` event's detail)."""
+
+    MEASURED = "local estimate available"
+    LONGEST = "longest probe reached"
+    SPEED_LOSS = "largest speed loss reached"
+
+
 class Prober:
     """The state of active friction probing: when it may start, its progress, its end.
 
@@ -299,15 +313,17 @@ class Prober:
         cfg = self.settings
         return cfg.max_decel_mps2 * min(1.0, (t_s - self._start_t) / cfg.ramp_s)
 
-    def reason_to_stop(self, t_s: float, speed_mps: float, local_available: bool) -> str | None:
-        """Why the running probe ends now (for the log), or None."""
+    def reason_to_stop(
+        self, t_s: float, speed_mps: float, local_available: bool
+    ) -> ProbeEndReason | None:
+        """Why the running probe ends now, or None."""
         cfg = self.settings
         if local_available:
-            return "local estimate available"
+            return ProbeEndReason.MEASURED
         if t_s - self._start_t >= cfg.max_duration_s - 1e-9:
-            return "longest probe reached"
+            return ProbeEndReason.LONGEST
         if self._start_speed - speed_mps >= cfg.max_speed_loss_mps:
-            return "largest speed loss reached"
+            return ProbeEndReason.SPEED_LOSS
         return None
 
     def stop(self, t_s: float, speed_mps: float) -> float:

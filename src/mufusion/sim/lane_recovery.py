@@ -1,0 +1,231 @@
+"""Lane recovery and braking when the evasion is futile, as a supervisor of the loop.
+
+What they do and why: :mod:`mufusion.sim.supervision` ("Lane recovery", "Braking when the
+evasion is futile").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import StrEnum
+
+import numpy as np
+
+from mufusion.configurations import FrictionEstimate
+from mufusion.planner import Plan
+from mufusion.sim.components import Planner, PlanningMode
+from mufusion.sim.events import EventKind, EventSink
+from mufusion.sim.settings import LaneRecoverySettings
+from mufusion.sim.supervision import (
+    planned_footprint_violation_m,
+    planned_obstacle_clearance_m,
+    plausible_estimate,
+    relaxed_estimate,
+)
+from mufusion.sim.supervisor import PlanningContext, Supervisor
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import State
+
+
+class RecoveryOutcome(StrEnum):
+    """What one step of lane recovery did (each is a ``lane_recovery`` event but ``BRAKING``, a
+    ``futile_evasion`` one)."""
+
+    RELAXED = "relaxed"
+    """A plan with μ̂ relaxed was adopted."""
+    DID_NOT_HELP = "did_not_help"
+    """No relaxation did better: the friction-limited plan was kept."""
+    EASED = "eased"
+    """The lane is kept with one step less of the held relaxation, which is adopted."""
+    BRAKING = "braking"
+    """Every evasion hits the obstacle: the stop in lane is adopted."""
+
+
+@dataclass(frozen=True)
+class Recovery:
+    """One step of lane recovery that was reported."""
+
+    t_s: float
+    outcome: RecoveryOutcome
+    alpha: float
+    """The relaxation adopted (0: none)."""
+    held_alpha: float
+    """The relaxation held from the step before."""
+
+
+class LaneRecovery(Supervisor):
+    """Re-plans with μ̂ relaxed towards the posterior mean where the plan cannot keep the lane.
+
+    Parameters
+    ----------
+    settings
+        Its switches and steps of relaxation.
+    planner
+        The planner whose warm start the search moves and restores.
+    params
+        Vehicle dimensions (footprint).
+    lane_bounds_m
+        ``(d_min, d_max)`` of the planner's reference point [m].
+    curvature
+        The road's curvature [1/m] at arc lengths [m].
+    event
+        Where the outcomes are reported.
+    """
+
+    def __init__(
+        self,
+        settings: LaneRecoverySettings,
+        planner: Planner,
+        params: VehicleParams,
+        lane_bounds_m: tuple[float, float],
+        curvature: Callable[[np.ndarray], np.ndarray],
+        event: EventSink,
+    ) -> None:
+        self.settings = settings
+        self.planner = planner
+        self.params = params
+        self.lane_bounds_m = lane_bounds_m
+        self.curvature = curvature
+        self._event = event
+        self.alpha = 0.0
+        """The relaxation adopted at the last step, held into the next (0: none)."""
+        self.recoveries: list[Recovery] = []
+        """Each step's outcome where lane recovery acted, in order."""
+
+    def adjust_inputs(
+        self, ctx: PlanningContext, mode: PlanningMode, estimate: FrictionEstimate
+    ) -> FrictionEstimate:
+        """``estimate`` relaxed by the fraction adopted at the previous step (not evading)."""
+        if not self.settings.enabled or ctx.minimal_risk or mode == "evade":
+            return estimate
+        if self.alpha > 0.0:
+            relaxed = relaxed_estimate(estimate, self.alpha)
+            if relaxed is not None:
+                return relaxed
+        self.alpha = 0.0
+        return estimate
+
+    def review(
+        self, ctx: PlanningContext, mode: PlanningMode, estimate: FrictionEstimate, plan: Plan
+    ) -> tuple[Plan, FrictionEstimate]:
+        """Re-plan with μ̂ relaxed towards the posterior mean if the plan cannot keep the lane.
+
+        ``plan`` was planned with ``estimate`` relaxed by the fraction the previous step adopted
+        (:meth:`adjust_inputs`); ``estimate`` itself is unrelaxed.
+        """
+        if not self.settings.enabled or ctx.minimal_risk:
+            return plan, estimate
+        # Evading, the plan leaves the lane by design and a held relaxation would only make the
+        # swerve harder (measured: off the road 4 → 13 of 108 F-safe pop-up runs): each step
+        # searches from the unrelaxed μ̂ there, and nothing is held into the steps after.
+        hold = mode != "evade"
+        if not hold:
+            self.alpha = 0.0
+        held = self.alpha
+        # Without a posterior (GT, L, P) there is nothing to relax: skip the footprint check,
+        # which would run at every planning step.
+        if relaxed_estimate(estimate, 1.0) is None:
+            self.alpha = 0.0
+            return plan, estimate
+        planned_with = relaxed_estimate(estimate, held) if held > 0.0 else estimate
+        assert planned_with is not None
+        tolerance = self.settings.violation_tolerance_m
+        before = self.footprint_violation_m(plan)
+        alphas = (0.0, *self.settings.steps)
+        t = ctx.t_s
+        # No friction-limited plan at all (the solve failed) counts as not keeping the lane.
+        if before <= tolerance and not plan.fallback:
+            if held == 0.0:
+                return plan, estimate
+            # The lane is kept with the relaxation held: try one step less of it, so that the
+            # guarantee of the lower bound returns as soon as the lane allows.
+            lower = alphas[alphas.index(held) - 1]
+            memory = self.planner.memory
+            candidate_estimate = relaxed_estimate(estimate, lower) if lower > 0.0 else estimate
+            assert candidate_estimate is not None
+            candidate = ctx.plan(candidate_estimate, mode)
+            if not candidate.fallback and self.footprint_violation_m(candidate) <= tolerance:
+                self.alpha = lower
+                self.recoveries.append(Recovery(t, RecoveryOutcome.EASED, lower, held))
+                self._event(
+                    t, EventKind.LANE_RECOVERY, f"the lane is kept with μ̂ relaxed {lower:.2f} of "
+                    f"the way to the posterior mean (was {held:.2f})")
+                return candidate, candidate_estimate
+            self.planner.restore(memory)
+            return plan, planned_with
+        # Each candidate starts from the one before (a continuation in α: the later candidates
+        # have had more iterations), and the next step continues the plan adopted: the planner
+        # keeps its latest plan as the next warm start (and that plan's front force as where
+        # the next plan's force starts), which after the search would be the last candidate
+        # tried, not the one the controller tracks.
+        # A plan predicted to hit an obstacle is never preferred to one predicted to pass it,
+        # however much further the latter leaves the lane (evading, the road band).
+        def rank(candidate: Plan, violation: float) -> tuple[bool, float]:
+            hits = planned_obstacle_clearance_m(candidate.states, ctx.obstacles, self.params) < 0.0
+            return (hits, np.inf if candidate.fallback else violation)
+
+        best = (rank(plan, before), before, plan, planned_with, held, self.planner.memory)
+        for alpha in (a for a in alphas if a > held):
+            relaxed = relaxed_estimate(estimate, alpha)
+            assert relaxed is not None
+            candidate = ctx.plan(relaxed, mode)
+            violation = self.footprint_violation_m(candidate)
+            key = rank(candidate, violation)
+            if not candidate.fallback and key < best[0]:
+                best = (key, violation, candidate, relaxed, alpha, self.planner.memory)
+            if not candidate.fallback and violation <= tolerance and not key[0]:
+                break
+        (every_one_hits, _), violation, plan, adopted, alpha, memory = best
+        self.planner.restore(memory)
+        if mode == "evade" and every_one_hits and self.settings.brake_when_futile:
+            braking = self._brake_if_futile(ctx, estimate)
+            if braking is not None:
+                self.alpha = 0.0
+                self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, held))
+                return braking, estimate
+        self.alpha = alpha if hold else 0.0
+        problem = "no friction-limited plan" if plan.fallback and alpha == 0.0 else (
+            "the friction-limited plan failed" if alpha > 0.0 and before <= tolerance
+            else f"the plan left the lane by {before:.2f} m"
+        )
+        held_note = f" (from {held:.2f} held)" if held > 0.0 else ""
+        outcome = RecoveryOutcome.RELAXED if alpha > 0.0 else RecoveryOutcome.DID_NOT_HELP
+        self.recoveries.append(Recovery(t, outcome, alpha, held))
+        self._event(
+            t, EventKind.LANE_RECOVERY,
+            f"{problem}; μ̂ relaxed {alpha:.2f} of the way to the posterior mean{held_note}, the "
+            f"plan leaves the lane by {violation:.2f} m" if alpha > 0.0 else f"{problem}; "
+            "relaxing μ̂ towards the posterior mean did not help",
+        )
+        return plan, adopted
+
+    def _brake_if_futile(self, ctx: PlanningContext, estimate: FrictionEstimate) -> Plan | None:
+        """The stop in lane, if an evasion with μ̂ at the posterior's upper 95 % edge also hits.
+
+        Called when every lane-recovery candidate is predicted to hit an obstacle; ``estimate``
+        is unrelaxed. Returns None (and the planner continues the adopted candidate) when that
+        evasion passes, or when either plan fails.
+        """
+        memory = self.planner.memory
+        top = plausible_estimate(estimate)
+        if top is not None:
+            check = ctx.plan(top, "evade")
+            gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params)
+            if not check.fallback and gap < 0.0:
+                brake = ctx.plan(estimate, "emergency")
+                if not brake.fallback:
+                    self._event(
+                        ctx.t_s, EventKind.FUTILE_EVASION,
+                        f"every evasion hits the obstacle, at the posterior's upper 95 % edge too "
+                        f"({gap:.2f} m); braking in lane")
+                    return brake
+        self.planner.restore(memory)
+        return None
+
+    def footprint_violation_m(self, plan: Plan) -> float:
+        """How far ``plan``'s predicted footprint leaves the lane [m] (0 inside)."""
+        states = plan.states[1:]
+        return planned_footprint_violation_m(
+            states, self.curvature(states[:, State.s]), self.lane_bounds_m, self.params
+        )

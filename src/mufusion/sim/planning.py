@@ -1,0 +1,128 @@
+"""The loop's side of the planner: one call with the estimate on its grid, and the stop-or-evade
+rule, from the state and the obstacles of one planning step.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from mufusion.configurations import FrictionEstimate
+from mufusion.planner import Plan, PlannerObstacle
+from mufusion.sim.components import Planner, PlanningMode
+from mufusion.sim.obstacle_response import ObstacleResponse, obstacle_mode
+from mufusion.sim.supervisor import PlanningContext
+from mufusion.sim.world import World
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import State
+
+
+class Planning:
+    """Calls the planner for the loop and keeps what carries from one planning step to the next.
+
+    Parameters
+    ----------
+    planner
+        The planner.
+    world
+        Road (curvature) for the planner.
+    params
+        Vehicle parameters (for the stop-or-evade rule).
+    estimate_grid_m
+        Distances ahead at which friction is estimated [m].
+    reference_speed_mps
+        Cruise speed the planner tracks.
+    lane_bounds_m
+        ``(d_min, d_max)`` the planner's reference point must stay within.
+    obstacle_response
+        The stop-or-evade rule's settings.
+    emergency_on_obstacle
+        Stop (mode ``emergency``) whenever an obstacle is active, instead of the rule.
+    """
+
+    def __init__(
+        self,
+        planner: Planner,
+        world: World,
+        params: VehicleParams,
+        estimate_grid_m: np.ndarray,
+        reference_speed_mps: float,
+        lane_bounds_m: tuple[float, float],
+        obstacle_response: ObstacleResponse,
+        emergency_on_obstacle: bool,
+    ) -> None:
+        self.planner = planner
+        self.world = world
+        self.params = params
+        self.grid_m = estimate_grid_m
+        self.reference_speed_mps = reference_speed_mps
+        self.lane_bounds_m = lane_bounds_m
+        self.obstacle_response = obstacle_response
+        self.emergency_on_obstacle = emergency_on_obstacle
+        self.last_mode: PlanningMode = "cruise"
+        """The mode chosen at the last planning step."""
+        self.front_force_n: float | None = None
+        """The front axle's body-frame lateral force of the last plant step: each plan's force
+        state starts from it (None before the first step: the warm-up plans start from theirs)."""
+
+    def context(
+        self, t_s: float, xf: np.ndarray, obstacles: Sequence[PlannerObstacle], minimal_risk: bool
+    ) -> PlanningContext:
+        """What the supervisors see of the planning step at ``t_s`` from ``xf``."""
+        s_ego = float(xf[State.s])
+        return PlanningContext(
+            t_s, xf, obstacles, minimal_risk, self.last_mode,
+            lambda estimate, mode: self.plan(xf, t_s, s_ego, estimate, obstacles, mode),
+            lambda estimate: self.mode(obstacles, xf, estimate),
+        )
+
+    def mode(
+        self, obstacles: Sequence[PlannerObstacle], xf: np.ndarray, estimate: FrictionEstimate
+    ) -> PlanningMode:
+        """The stop-or-evade rule's mode (braking on if the last step braked)."""
+        if obstacles and self.emergency_on_obstacle:
+            return "emergency"
+        return obstacle_mode(
+            obstacles, xf, self.grid_m, estimate.mu_hat, self.lane_bounds_m,
+            self.params, self.obstacle_response, braking=self.last_mode == "emergency",
+        )
+
+    def warm_up(
+        self, xf: np.ndarray, estimate: FrictionEstimate, steps: int, planner_hz: float
+    ) -> None:
+        """``steps`` plans at ``xf`` before the clock starts, without obstacles: a warm start."""
+        s_ego = float(xf[State.s])
+        for k in range(steps):
+            self.plan(xf, -(steps - k) / planner_hz, s_ego, estimate, [], "cruise")
+
+    def plan(
+        self,
+        xf: np.ndarray,
+        t: float,
+        s_anchor_m: float,
+        estimate: FrictionEstimate,
+        obstacles: Sequence[PlannerObstacle],
+        mode: PlanningMode,
+    ) -> Plan:
+        """One planner step with ``estimate``'s μ̂ on its grid ahead of ``s_anchor_m``."""
+        grid_abs = s_anchor_m + self.grid_m
+        mu_hat_grid = np.asarray(estimate.mu_hat, dtype=float)
+
+        def mu_hat_of_s(s: np.ndarray) -> np.ndarray:
+            # Beyond the camera's range the last estimate is held (TAMP framework).
+            return np.interp(np.asarray(s, dtype=float), grid_abs, mu_hat_grid)
+
+        return self.planner.step(
+            xf,
+            t,
+            curvature_of_s=self.world.curvature,
+            mu_hat_of_s=mu_hat_of_s,
+            obstacles=obstacles,
+            mode=mode,
+            reference_speed_mps=self.reference_speed_mps,
+            reference_d_m=0.0,
+            lane_d_min_m=self.lane_bounds_m[0],
+            lane_d_max_m=self.lane_bounds_m[1],
+            front_force_n=self.front_force_n,
+        )
