@@ -7,6 +7,12 @@ that fails, raises, or returns a non-finite or implausible solution keeps the sh
 counted and logged, re-initialises the solver, and never raises. After
 ``SafetySettings.max_consecutive_fallbacks`` such steps in a row the caller should switch to
 ``mode="minimal_risk"`` (:mod:`mufusion.planner.minimal_risk`).
+
+A step's stages: the obstacles it plans around; its guess (the shifted previous plan, a
+sampled roll-out, :func:`~mufusion.planner.sampling.sampled_guess`, or the minimal-risk
+roll-out) with the front force it starts from; the real-time iterations
+(:func:`~mufusion.planner.rti.iterate`); the outcome counted; the plan
+(:func:`~mufusion.planner.rti.plan_of`).
 """
 
 from __future__ import annotations
@@ -27,32 +33,22 @@ from mufusion.planner.ocp import (
     PlannerConfig,
     PlannerMode,
     PlannerObstacle,
-    axle_loads_n,
-    lateral_corridor,
-    plan_polygon_radii_n,
-    stage_parameters,
-    tracking_reference,
 )
 from mufusion.planner.passing import in_path
 from mufusion.planner.plan import FallbackReason, Plan
-from mufusion.planner.safeguards import FrictionProfile, SanitizedFriction, check_solution
+from mufusion.planner.rti import Iterated, StepProblem, iterate, plan_of
+from mufusion.planner.safeguards import FrictionProfile, SanitizedFriction
 from mufusion.planner.sampling import (
-    SHIFTED_DISCOUNT,
-    VIOLATION_WEIGHT,
     SamplingConfig,
-    candidate_rollouts,
     rk4_step,
-    tracking_cost,
-    violation_m,
+    sampled_guess,
 )
-from mufusion.planner.speed_profile import curve_speed_reference_mps
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
     N_STATES,
     Input,
     State,
-    rear_lateral_force_n,
 )
 
 _log = logging.getLogger(__name__)
@@ -278,10 +274,35 @@ class TractionAdaptivePlanner:
             raise ValueError(f"mode must be one of {list(PLANNER_MODES)}, got {mode!r}")
         if mode == "evade":
             reference_speed_mps = min(reference_speed_mps, float(x0[State.vx]))
+        cfg = self.config
+        problem = StepProblem(
+            x0, mode, curvature_of_s,
+            SanitizedFriction(mu_hat_of_s, self._mu_profile, cfg.safety.mu_floor),
+            self._obstacles(x0, obstacles, mode), reference_speed_mps, reference_d_m,
+            cfg.lane_d_min_m if lane_d_min_m is None else lane_d_min_m,
+            cfg.lane_d_max_m if lane_d_max_m is None else lane_d_max_m,
+        )
+        started = time.perf_counter()
+        guess_x, guess_u, sampled = self._guess(problem, t_s, front_force_n)
+        # One real-time iteration per step; a cold start has no converged plan to iterate from,
+        # so it takes a few (re-linearised at each iterate, as the next steps would).
+        iterations = 1 if self._prev is not None else cfg.cold_start_iterations
+        solved = iterate(self._backend, self.params, cfg, problem, guess_x, guess_u, iterations)
+        states_inputs = self._settle(solved, mode)  # counts the step: before the plan
+        plan = plan_of(self.params, cfg, problem, solved, states_inputs, t_s, started, sampled,
+                       self._consecutive_fallbacks)
+        self._prev = plan
+        self._mu_profile = FrictionProfile.from_stages(
+            solved.guess_x[:-1, State.s], solved.stage["mu_hat"])
+        return plan
+
+    # -- the stages of one step -----------------------------------------------------------------
+    def _obstacles(
+        self, x0: np.ndarray, obstacles: Sequence[PlannerObstacle], mode: PlannerMode
+    ) -> list[PlannerObstacle]:
+        """The obstacles the step plans around (as :class:`PlannerObstacle`)."""
         cfg, par = self.config, self.params
-        lo_lane = cfg.lane_d_min_m if lane_d_min_m is None else lane_d_min_m
-        hi_lane = cfg.lane_d_max_m if lane_d_max_m is None else lane_d_max_m
-        obstacles = [
+        found = [
             o if isinstance(o, PlannerObstacle) else PlannerObstacle(*map(float, o))
             for o in obstacles
         ]
@@ -292,22 +313,30 @@ class TractionAdaptivePlanner:
             # its rear axle exceeds the polygon, the plan is rejected, the shifted cruise plan is
             # kept, and the stop under way turns into a late swerve (docs/decisions/0022).
             clear = 0.5 * par.width_m + cfg.obstacle_margin_m
-            obstacles = [o for o in obstacles if not in_path(
+            found = [o for o in found if not in_path(
                 o.s_m, o.d_m, clear + 0.5 * o.width_m, float(x0[State.s]), float(x0[State.d]))]
-        mu_of_s = SanitizedFriction(mu_hat_of_s, self._mu_profile, cfg.safety.mu_floor)
-        started = time.perf_counter()
+        return found
+
+    def _guess(
+        self, problem: StepProblem, t_s: float, front_force_n: float | None
+    ) -> tuple[np.ndarray, np.ndarray, bool]:
+        """The guess the iterations start from, and whether it is a sampled roll-out."""
+        cfg, x0, mode = self.config, problem.x0, problem.mode
         sampled = False
         if mode == "minimal_risk":
             guess_x, guess_u = minimal_risk_rollout(
-                x0, reference_d_m, curvature_of_s, mu_of_s, par, cfg, self.sampling
+                x0, problem.reference_d_m, problem.curvature_of_s, problem.mu_of_s, self.params,
+                cfg, self.sampling,
             )
         else:
             guess_x, guess_u = self._initial_guess(x0, t_s)
             if cfg.use_sampling:
-                v_ref = 0.0 if mode == "emergency" else reference_speed_mps
-                guess_x, guess_u, sampled = self._sample(
-                    x0, guess_x, guess_u, curvature_of_s, mu_of_s, obstacles, v_ref,
-                    reference_d_m, lo_lane, hi_lane,
+                v_ref = 0.0 if mode == "emergency" else problem.reference_speed_mps
+                guess_x, guess_u, sampled = sampled_guess(
+                    x0, guess_x, guess_u, problem.curvature_of_s, problem.mu_of_s,
+                    problem.obstacles, v_ref, problem.reference_d_m, problem.lane_d_min_m,
+                    problem.lane_d_max_m, self.params, cfg, self.sampling,
+                    continuing=self._prev is not None,
                 )
         if cfg.steering_rate_limit:
             # The front force cannot jump: the plan starts from the force the tires deliver now,
@@ -322,88 +351,21 @@ class TractionAdaptivePlanner:
             if applied is not None:
                 guess_u = guess_u.copy()
                 guess_u[0, Input.fyf] = applied
-        # One real-time iteration per step; a cold start has no converged plan to iterate from,
-        # so it takes a few (re-linearised at each iterate, as the next steps would).
-        iterations = 1 if self._prev is not None else cfg.cold_start_iterations
-        braking = mode in ("emergency", "minimal_risk")
-        xs, us = guess_x, guess_u
-        reason = FallbackReason.NONE
-        retried = False
-        for _ in range(iterations):
-            guess_x, guess_u = xs, us
-            speed_ref: float | np.ndarray = reference_speed_mps
-            if cfg.curve_speed_reference and mode in ("cruise", "evade"):
-                # Before the stage parameters: those count the sanitised μ̂ of the stages.
-                speed_ref = curve_speed_reference_mps(
-                    guess_x[:, State.s], curvature_of_s, mu_of_s, reference_speed_mps,
-                    cfg.utilization_factor * np.cos(np.pi / cfg.polygon_sides),
-                    cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
-                    (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2)
-                    if cfg.reference_regain_limit and mode == "cruise" else None,
-                )
-            stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
-                                     cfg.utilization_factor, cfg.stiffness_table)
-            d_lo, d_hi = lateral_corridor(
-                guess_x, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m,
-                curvature_of_s(guess_x[1:, State.s]),
-            )
-            yref, weights = tracking_reference(
-                cfg, stage["curvature"], stage["mu_hat"], mode, float(x0[State.vx]),
-                speed_ref, reference_d_m,
-            )
-            status = -1
-            try:
-                status, xs, us = self._backend.solve(
-                    x0, guess_x, guess_u, stage["p"], yref, weights, d_lo, d_hi,
-                    0.0 if braking else cfg.min_speed_mps,
-                    # No traction while evading or stopping: the rear tires' friction is kept
-                    # for lateral force and braking. In cruise, traction is capped at a heavy
-                    # vehicle's acceleration, not at the friction limit: regaining speed at the
-                    # limit after an evasion leaves the driven axle no lateral reserve.
-                    par.mass_kg * cfg.max_cruise_accel_mps2 if mode == "cruise" else 0.0,
-                )
-                retried = retried or self._backend.last_solve_retried
-                if status not in (0, 2):
-                    reason = FallbackReason.SOLVER_STATUS
-                else:
-                    reason = check_solution(xs, us, stage, d_lo, d_hi, par, cfg.polygon_sides,
-                                            cfg.plausibility, load_transfer=cfg.load_transfer)
-            except Exception as exc:  # never raise inside the loop
-                _log.warning("planner backend raised %r", exc)
-                reason = FallbackReason.EXCEPTION
-            if reason is not FallbackReason.NONE:
-                break
-        good = reason is FallbackReason.NONE
-        if good:
+        return guess_x, guess_u, sampled
+
+    def _settle(self, solved: Iterated, mode: PlannerMode) -> tuple[np.ndarray, np.ndarray]:
+        """Count the step's outcome; the plan's states and inputs (the guess if it failed)."""
+        if solved.reason is FallbackReason.NONE:
             self._consecutive_fallbacks = 0
-        else:
-            self.failures += 1
-            self._consecutive_fallbacks += 1
-            _log.warning("planner solve failed (%s, status %s; %d in a row, %d so far); keeping "
-                         "the %s plan", reason.value, status, self._consecutive_fallbacks,
-                         self.failures, "minimal-risk" if mode == "minimal_risk" else "shifted")
-            xs, us = guess_x, guess_u
-            self._reinitialise_backend()
-        fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], par)
-        # The loads and radii the plan was solved with (its own, with load transfer).
-        limit_front, limit_rear = plan_polygon_radii_n(us, stage, par, cfg.load_transfer)
-        load_front, load_rear = stage["fzf"], stage["fzr"]
-        if cfg.load_transfer:
-            load_front, load_rear = axle_loads_n(us, par)
-        plan = Plan(
-            t0_s=float(t_s), states=xs, inputs=us, rear_lateral_force_n=np.asarray(fyr),
-            mu_hat=stage["mu_hat"], normal_load_front_n=load_front,
-            normal_load_rear_n=load_rear, force_limit_front_n=limit_front,
-            force_limit_rear_n=limit_rear, status=int(status), ok=good,
-            fallback=not good, solve_time_s=time.perf_counter() - started,
-            sampled_reinit=sampled, robust_qp_retry=retried, dt_s=cfg.dt_s,
-            fallback_reason=reason,
-            consecutive_fallbacks=self._consecutive_fallbacks,
-            mu_sanitized_stages=mu_of_s.last_count, mode=mode,
-        )
-        self._prev = plan
-        self._mu_profile = FrictionProfile.from_stages(guess_x[:-1, State.s], stage["mu_hat"])
-        return plan
+            return solved.xs, solved.us
+        self.failures += 1
+        self._consecutive_fallbacks += 1
+        _log.warning("planner solve failed (%s, status %s; %d in a row, %d so far); keeping "
+                     "the %s plan", solved.reason.value, solved.status,
+                     self._consecutive_fallbacks, self.failures,
+                     "minimal-risk" if mode == "minimal_risk" else "shifted")
+        self._reinitialise_backend()
+        return solved.guess_x, solved.guess_u
 
     def _reinitialise_backend(self) -> None:
         # A failed QP can leave NaN multipliers that poison every later RTI step.
@@ -411,37 +373,3 @@ class TractionAdaptivePlanner:
             self._backend.reset()
         except Exception as exc:  # never raise inside the loop
             _log.warning("planner backend reset raised %r", exc)
-
-    def _sample(self, x0, guess_x, guess_u, curvature_of_s, mu_hat_of_s, obstacles, v_ref, d_ref,
-                lo_lane, hi_lane):
-        """SAA: replace the shifted guess by the best sampled roll-out when that beats it."""
-        cfg, par, sc = self.config, self.params, self.sampling
-        try:
-            shifted_violation = float(violation_m(
-                guess_x[:, :, None], obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m
-            )[0])
-            if self._prev is not None and shifted_violation <= sc.trigger_violation_m:
-                return guess_x, guess_u, False
-            lateral = np.append(np.linspace(lo_lane, hi_lane, sc.n_lateral), d_ref)
-            speeds = np.append(np.asarray(sc.speed_fractions) * v_ref, x0[State.vx])
-            with np.errstate(all="ignore"):  # diverging candidates are discarded below
-                xs, us = candidate_rollouts(
-                    x0, lateral, speeds, curvature_of_s, mu_hat_of_s, par,
-                    cfg.utilization_factor, cfg.horizon_steps, cfg.dt_s, sc,
-                    stiffness_table=cfg.stiffness_table,
-                )
-            both = np.concatenate([guess_x[:, :, None], xs], axis=2)
-            with np.errstate(all="ignore"):
-                tracking = tracking_cost(both, v_ref, d_ref)
-            tracking[0] *= SHIFTED_DISCOUNT
-            cost = tracking + VIOLATION_WEIGHT * violation_m(
-                both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m
-            )
-            cost = np.where(np.isfinite(cost), cost, np.inf)
-            best = int(np.argmin(cost))
-            if best == 0 or not np.isfinite(cost[best]):
-                return guess_x, guess_u, False
-            return xs[:, :, best - 1], us[:, :, best - 1], True
-        except Exception as exc:  # sampling is an aid; never let it break the loop
-            _log.warning("sampling augmentation failed: %r", exc)
-            return guess_x, guess_u, False

@@ -10,12 +10,13 @@ obstacle corridor's side is chosen by the guess, this is what lets the planner s
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+import logging
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from mufusion.planner.ocp import PlannerObstacle, longitudinal_force_bounds_n
+from mufusion.planner.ocp import PlannerConfig, PlannerObstacle, longitudinal_force_bounds_n
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
     MIN_SPEED_FOR_SLIP_MPS,
@@ -28,6 +29,8 @@ from mufusion.vehicle.planner_model import (
     rear_cornering_stiffness_n_per_rad,
 )
 from mufusion.vehicle.surface_tires import SurfaceTireTable
+
+_log = logging.getLogger(__name__)
 
 # Cost of one metre of obstacle/road violation relative to tracking (per stage) [1/m].
 VIOLATION_WEIGHT = 1e4
@@ -319,3 +322,57 @@ def candidate_rollouts(
         np.maximum(x[State.vx], 0.0, out=x[State.vx])
         ax = (fxf + fxr) / m
     return xs, us
+
+
+def sampled_guess(
+    x0: np.ndarray,
+    guess_x: np.ndarray,
+    guess_u: np.ndarray,
+    curvature_of_s: Callable[[np.ndarray], np.ndarray],
+    mu_hat_of_s: Callable[[np.ndarray], np.ndarray],
+    obstacles: Sequence[PlannerObstacle],
+    v_ref: float,
+    d_ref: float,
+    lo_lane: float,
+    hi_lane: float,
+    par: VehicleParams,
+    cfg: PlannerConfig,
+    sc: SamplingConfig,
+    *,
+    continuing: bool,
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    """SAA: replace the shifted guess by the best sampled roll-out when that beats it.
+
+    Returns the guess and whether it is a sampled roll-out. ``continuing``: the guess continues
+    a previous plan (then sampling is tried only if that plan violates more than
+    ``sc.trigger_violation_m``). Never raises: sampling is an aid.
+    """
+    try:
+        shifted_violation = float(violation_m(
+            guess_x[:, :, None], obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m
+        )[0])
+        if continuing and shifted_violation <= sc.trigger_violation_m:
+            return guess_x, guess_u, False
+        lateral = np.append(np.linspace(lo_lane, hi_lane, sc.n_lateral), d_ref)
+        speeds = np.append(np.asarray(sc.speed_fractions) * v_ref, x0[State.vx])
+        with np.errstate(all="ignore"):  # diverging candidates are discarded below
+            xs, us = candidate_rollouts(
+                x0, lateral, speeds, curvature_of_s, mu_hat_of_s, par,
+                cfg.utilization_factor, cfg.horizon_steps, cfg.dt_s, sc,
+                stiffness_table=cfg.stiffness_table,
+            )
+        both = np.concatenate([guess_x[:, :, None], xs], axis=2)
+        with np.errstate(all="ignore"):
+            tracking = tracking_cost(both, v_ref, d_ref)
+        tracking[0] *= SHIFTED_DISCOUNT
+        cost = tracking + VIOLATION_WEIGHT * violation_m(
+            both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m
+        )
+        cost = np.where(np.isfinite(cost), cost, np.inf)
+        best = int(np.argmin(cost))
+        if best == 0 or not np.isfinite(cost[best]):
+            return guess_x, guess_u, False
+        return xs[:, :, best - 1], us[:, :, best - 1], True
+    except Exception as exc:  # sampling is an aid; never let it break the loop
+        _log.warning("sampling augmentation failed: %r", exc)
+        return guess_x, guess_u, False

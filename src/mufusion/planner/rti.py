@@ -1,0 +1,169 @@
+"""One planning step's real-time iterations and the plan they give (the stages of
+:meth:`~mufusion.planner.TractionAdaptivePlanner.step` after its guess).
+
+Each iteration evaluates the stage parameters (sanitised μ̂, normal loads, rear stiffness) at
+the guess's predicted positions, builds the lateral corridor and the tracking reference, and
+solves the OCP once; a solve that fails, raises, or returns a non-finite or implausible solution
+ends the iterations with its reason (:func:`~mufusion.planner.safeguards.check_solution`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from mufusion.planner.backend import PlannerBackend
+from mufusion.planner.ocp import (
+    PlannerConfig,
+    PlannerMode,
+    PlannerObstacle,
+    axle_loads_n,
+    lateral_corridor,
+    plan_polygon_radii_n,
+    stage_parameters,
+    tracking_reference,
+)
+from mufusion.planner.plan import FallbackReason, Plan
+from mufusion.planner.safeguards import SanitizedFriction, check_solution
+from mufusion.planner.speed_profile import curve_speed_reference_mps
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import State, rear_lateral_force_n
+
+_log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class StepProblem:
+    """What one planning step plans from, with, and around."""
+
+    x0: np.ndarray
+    """The state (s, d, Δψ, ψ̇, v_x, v_y) the plan starts from."""
+    mode: PlannerMode
+    curvature_of_s: Callable[[np.ndarray], np.ndarray]
+    mu_of_s: SanitizedFriction
+    obstacles: list[PlannerObstacle]
+    reference_speed_mps: float
+    reference_d_m: float
+    lane_d_min_m: float
+    lane_d_max_m: float
+
+
+@dataclass(frozen=True)
+class Iterated:
+    """The real-time iterations' outcome: the last iterate, the guess it started from and the
+    stage parameters it was solved with."""
+
+    xs: np.ndarray
+    us: np.ndarray
+    guess_x: np.ndarray
+    guess_u: np.ndarray
+    stage: dict[str, np.ndarray]
+    status: int
+    reason: FallbackReason
+    """``NONE`` if every iteration succeeded, else why the last one failed."""
+    retried: bool
+    """The fast QP failed at some iteration and the robust one was tried."""
+
+
+def iterate(
+    backend: PlannerBackend,
+    par: VehicleParams,
+    cfg: PlannerConfig,
+    problem: StepProblem,
+    guess_x: np.ndarray,
+    guess_u: np.ndarray,
+    iterations: int,
+) -> Iterated:
+    """``iterations`` real-time iterations of ``problem`` from the guess, until one fails."""
+    x0, mode = problem.x0, problem.mode
+    curvature_of_s, mu_of_s = problem.curvature_of_s, problem.mu_of_s
+    reference_speed_mps = problem.reference_speed_mps
+    braking = mode in ("emergency", "minimal_risk")
+    xs, us = guess_x, guess_u
+    reason = FallbackReason.NONE
+    retried = False
+    for _ in range(iterations):
+        guess_x, guess_u = xs, us
+        speed_ref: float | np.ndarray = reference_speed_mps
+        if cfg.curve_speed_reference and mode in ("cruise", "evade"):
+            # Before the stage parameters: those count the sanitised μ̂ of the stages.
+            speed_ref = curve_speed_reference_mps(
+                guess_x[:, State.s], curvature_of_s, mu_of_s, reference_speed_mps,
+                cfg.utilization_factor * np.cos(np.pi / cfg.polygon_sides),
+                cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
+                (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2)
+                if cfg.reference_regain_limit and mode == "cruise" else None,
+            )
+        stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
+                                 cfg.utilization_factor, cfg.stiffness_table)
+        d_lo, d_hi = lateral_corridor(
+            guess_x, problem.obstacles, problem.lane_d_min_m, problem.lane_d_max_m, par,
+            cfg.obstacle_margin_m, curvature_of_s(guess_x[1:, State.s]),
+        )
+        yref, weights = tracking_reference(
+            cfg, stage["curvature"], stage["mu_hat"], mode, float(x0[State.vx]),
+            speed_ref, problem.reference_d_m,
+        )
+        status = -1
+        try:
+            status, xs, us = backend.solve(
+                x0, guess_x, guess_u, stage["p"], yref, weights, d_lo, d_hi,
+                0.0 if braking else cfg.min_speed_mps,
+                # No traction while evading or stopping: the rear tires' friction is kept
+                # for lateral force and braking. In cruise, traction is capped at a heavy
+                # vehicle's acceleration, not at the friction limit: regaining speed at the
+                # limit after an evasion leaves the driven axle no lateral reserve.
+                par.mass_kg * cfg.max_cruise_accel_mps2 if mode == "cruise" else 0.0,
+            )
+            retried = retried or backend.last_solve_retried
+            if status not in (0, 2):
+                reason = FallbackReason.SOLVER_STATUS
+            else:
+                reason = check_solution(xs, us, stage, d_lo, d_hi, par, cfg.polygon_sides,
+                                        cfg.plausibility, load_transfer=cfg.load_transfer)
+        except Exception as exc:  # never raise inside the loop
+            _log.warning("planner backend raised %r", exc)
+            reason = FallbackReason.EXCEPTION
+        if reason is not FallbackReason.NONE:
+            break
+    return Iterated(xs, us, guess_x, guess_u, stage, status, reason, retried)
+
+
+def plan_of(
+    par: VehicleParams,
+    cfg: PlannerConfig,
+    problem: StepProblem,
+    solved: Iterated,
+    states_inputs: tuple[np.ndarray, np.ndarray],
+    t_s: float,
+    started_s: float,
+    sampled: bool,
+    consecutive_fallbacks: int,
+) -> Plan:
+    """The step's plan from its states and inputs (the last iterate, or the guess if the
+    iterations failed) and what they were solved with; ``started_s``: the step's
+    ``time.perf_counter()`` at the start, for its solve time."""
+    xs, us = states_inputs
+    stage = solved.stage
+    good = solved.reason is FallbackReason.NONE
+    fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], par)
+    # The loads and radii the plan was solved with (its own, with load transfer).
+    limit_front, limit_rear = plan_polygon_radii_n(us, stage, par, cfg.load_transfer)
+    load_front, load_rear = stage["fzf"], stage["fzr"]
+    if cfg.load_transfer:
+        load_front, load_rear = axle_loads_n(us, par)
+    return Plan(
+        t0_s=float(t_s), states=xs, inputs=us, rear_lateral_force_n=np.asarray(fyr),
+        mu_hat=stage["mu_hat"], normal_load_front_n=load_front,
+        normal_load_rear_n=load_rear, force_limit_front_n=limit_front,
+        force_limit_rear_n=limit_rear, status=int(solved.status), ok=good,
+        fallback=not good, solve_time_s=time.perf_counter() - started_s,
+        sampled_reinit=sampled, robust_qp_retry=solved.retried, dt_s=cfg.dt_s,
+        fallback_reason=solved.reason,
+        consecutive_fallbacks=consecutive_fallbacks,
+        mu_sanitized_stages=problem.mu_of_s.last_count, mode=problem.mode,
+    )
