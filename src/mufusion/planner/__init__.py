@@ -1,8 +1,8 @@
 """mufusion.planner: traction-adaptive MPC planner and the controller that tracks its plans."""
 
 from mufusion.planner.backend import PlannerBackend
+from mufusion.planner.config import CostWeights, PlannerConfig, PlannerObstacle, PlausibilityLimits
 from mufusion.planner.controller import ControllerGains, TrackingController
-from mufusion.planner.ocp import CostWeights, PlannerConfig, PlannerObstacle, PlausibilityLimits
 from mufusion.planner.plan import FallbackReason, Plan
 from mufusion.planner.planner import PlannerMemory, TractionAdaptivePlanner
 from mufusion.planner.sampling import SamplingConfig

@@ -63,7 +63,7 @@ def rk4_steps_per_stage(
     """RK4 steps per planning stage of ``dt_s`` [s] that keep the model stable down to rest.
 
     ``utilization`` and ``max_accel_mps2``: the planner's utilisation factor and traction cap
-    (:class:`~mufusion.planner.ocp.PlannerConfig`), see :func:`fastest_mode_1ps`.
+    (:class:`~mufusion.planner.config.PlannerConfig`), see :func:`fastest_mode_1ps`.
 
     Examples
     --------

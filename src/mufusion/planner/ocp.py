@@ -4,21 +4,27 @@ Small factories assemble the pieces: per-stage parameters (curvature, rear stiff
 radii), friction polygons and their constraint expressions, actuator bounds on the longitudinal
 forces, the lateral corridor from lanes and obstacles, the tracking reference and weights, and
 the slack penalties. Both backends (acados RTI, CasADi + IPOPT reference) build their problem
-from these pieces only, and implement :class:`~mufusion.planner.backend.PlannerBackend`.
+from these pieces only, and implement :class:`~mufusion.planner.backend.PlannerBackend`. What
+configures the problem is apart, in :mod:`mufusion.planner.config`.
 """
 
 from __future__ import annotations
 
 import functools
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from enum import IntEnum
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
+# Importers of this module keep the configuration's names.
+from mufusion.planner.config import CostWeights as CostWeights
+from mufusion.planner.config import PlannerConfig as PlannerConfig
+from mufusion.planner.config import PlannerMode as PlannerMode
+from mufusion.planner.config import PlannerObstacle as PlannerObstacle
+from mufusion.planner.config import PlausibilityLimits as PlausibilityLimits
 from mufusion.planner.passing import passing_left
-from mufusion.planner.safety import SafetySettings
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -30,11 +36,6 @@ from mufusion.vehicle.planner_model import (
     rear_lateral_force_n,
 )
 from mufusion.vehicle.surface_tires import SurfaceTireTable
-
-PlannerMode = Literal["cruise", "evade", "emergency", "minimal_risk"]
-StiffnessModel = Literal["fixed", "from_mu_hat"]
-STIFFNESS_MODELS: tuple[str, ...] = ("fixed", "from_mu_hat")
-PLANNER_MODES: tuple[str, ...] = ("cruise", "evade", "emergency", "minimal_risk")
 
 # Upper bound on v_x at stages 1..N [m/s]: inactive in practice, it keeps the box finite.
 MAX_SPEED_MPS = 100.0
@@ -58,172 +59,10 @@ class Param(IntEnum):
 
 N_PARAMS = len(Param)
 
-
-@dataclass(frozen=True)
-class CostWeights:
-    """Least-squares weights (acados multiplies them by dt)."""
-
-    speed: float = 1.0
-    lateral_offset: float = 1.0
-    heading_error: float = 1.0
-    yaw_rate: float = 1.0
-    lateral_speed: float = 1.0
-    force_per_kn: float = 1e-4
-    emergency_speed: float = 10.0
-    evade_speed: float = 0.05
-    slack_l1: float = 1e4
-    slack_l2: float = 1e4
-
-
-@dataclass(frozen=True)
-class PlausibilityLimits:
-    """Tolerances of the check a solver's "success" must pass before its plan is used.
-
-    Forces are compared with the friction polygons used in the solve: a row may exceed its
-    inscribed radius by ``front_polygon_tolerance`` (front, a hard constraint: only solver
-    tolerance) or ``rear_polygon_tolerance`` (rear, soft: its slack may be used) as a fraction of
-    the polygon radius; longitudinal forces may exceed the actuator bounds by
-    ``force_bound_tolerance`` of the bound. ``d`` may leave the stage's corridor by
-    ``corridor_tolerance_m`` (the corridor is soft), ``|Δψ|`` may not exceed
-    ``max_heading_error_rad`` and ``v_x`` must lie in ``[-speed_tolerance_mps,
-    MAX_SPEED_MPS + speed_tolerance_mps]``.
-    """
-
-    # Defaults sit well outside what accepted solutions reach in the shipped scenarios (all
-    # configurations, emergency mode included: front 0, rear 0.75, bounds 0, corridor 1.5 m,
-    # heading 0.95 rad, speed −0.01 m/s; `python benchmarks/planner.py --margins`) and well
-    # inside a diverged solution.
-    front_polygon_tolerance: float = 0.05
-    rear_polygon_tolerance: float = 3.0
-    force_bound_tolerance: float = 0.05
-    corridor_tolerance_m: float = 5.0
-    max_heading_error_rad: float = 1.5
-    speed_tolerance_mps: float = 1.0
-
-    def __post_init__(self) -> None:
-        for name in ("front_polygon_tolerance", "rear_polygon_tolerance", "force_bound_tolerance"):
-            value = getattr(self, name)
-            if not 0.0 <= value <= 10.0:
-                raise ValueError(f"{name} must be in [0, 10], got {value}")
-        if not 0.0 <= self.corridor_tolerance_m <= 100.0:
-            raise ValueError(
-                f"corridor_tolerance_m must be in [0, 100] m, got {self.corridor_tolerance_m}"
-            )
-        if not 0.0 < self.max_heading_error_rad <= np.pi:
-            raise ValueError(
-                f"max_heading_error_rad must be in (0, pi], got {self.max_heading_error_rad}"
-            )
-        if not 0.0 <= self.speed_tolerance_mps <= 100.0:
-            raise ValueError(
-                f"speed_tolerance_mps must be in [0, 100] m/s, got {self.speed_tolerance_mps}"
-            )
-
-
-@dataclass(frozen=True)
-class PlannerObstacle:
-    """An obstacle in road coordinates: centre ``(s_m, d_m)``, extent ``length_m × width_m``."""
-
-    s_m: float
-    d_m: float
-    length_m: float
-    width_m: float
-
-
-@dataclass(frozen=True)
-class PlannerConfig:
-    """Planner configuration; checked on construction.
-
-    ``stiffness`` says which cornering stiffness the planner's linear rear tire and the
-    controller's inverse Magic Formula assume: ``"fixed"`` (default), the vehicle's tire on every
-    surface; ``"from_mu_hat"``, the set of ``stiffness_table`` at the estimate μ̂ of each stage
-    (the authors' ``get_cornering_stiffness``: a model that knows the tire's surface dependence
-    but not the surface, so a wrong μ̂ gives a wrong stiffness too).
-    """
-
-    horizon_steps: int = 40
-    dt_s: float = 0.1
-    utilization_factor: float = 0.9
-    polygon_sides: int = 12
-    weights: CostWeights = field(default_factory=CostWeights)
-    backend: Literal["acados", "casadi"] = "acados"
-    use_sampling: bool = True
-    # Bounds on the reference point's lateral offset [m]: a 3.5 m lane minus half a truck width.
-    lane_d_min_m: float = -0.45
-    lane_d_max_m: float = 0.45
-    obstacle_margin_m: float = 0.5
-    min_speed_mps: float = 0.5
-    cold_start_iterations: int = 3
-    max_cruise_accel_mps2: float = 1.5
-    # Recovery (see docs/planner.md, "Failures and recovery"): friction floor, minimal-risk
-    # deceleration, and the fallback count after which the caller switches to "minimal_risk".
-    safety: SafetySettings = field(default_factory=SafetySettings)
-    plausibility: PlausibilityLimits = field(default_factory=PlausibilityLimits)
-    stiffness: StiffnessModel = "fixed"
-    stiffness_table: SurfaceTireTable | None = None
-    # Track min(cruise speed, the point mass's highest speed along the lane centre) instead of the
-    # cruise speed alone (planner/speed_profile.py).
-    curve_speed_reference: bool = True
-    # Share of the friction the speed reference's braking ramps before a curve assume, in (0, 1]
-    # (planner/speed_profile.py): below 1 the reference starts braking earlier than the polygon
-    # requires and keeps the rest as a reserve for braking the plans lose at the turn-in
-    # (docs/decisions/0031, "A braking reserve in the speed reference").
-    reference_braking_fraction: float = 0.8
-    # The reference regains speed from the vehicle's own no faster than the cruise traction cap
-    # on the g-g ellipse allows (planner/speed_profile.py, ``regain_limited_profile_mps``).
-    reference_regain_limit: bool = True
-    # Plan the front lateral force as a state whose rate the steering's rate limit bounds
-    # (planner/front_force.py; beyond the paper, whose forces are free inputs).
-    steering_rate_limit: bool = True
-    # The friction polygons' radii follow the axle loads of the plan's own longitudinal forces
-    # (pitch load transfer inside the OCP) instead of the guess's (beyond the paper).
-    load_transfer: bool = True
-
-    def __post_init__(self) -> None:
-        if self.stiffness not in STIFFNESS_MODELS:
-            raise ValueError(
-                f"stiffness must be one of {list(STIFFNESS_MODELS)}, got {self.stiffness!r}"
-            )
-        if self.stiffness == "from_mu_hat" and not isinstance(
-            self.stiffness_table, SurfaceTireTable
-        ):
-            raise ValueError("stiffness='from_mu_hat' needs a SurfaceTireTable as stiffness_table")
-        if self.stiffness == "fixed" and self.stiffness_table is not None:
-            raise ValueError("stiffness_table is only used with stiffness='from_mu_hat'; "
-                             "with 'fixed' leave it None")
-        if not 5 <= self.horizon_steps <= 200:
-            raise ValueError(f"horizon_steps must be in [5, 200], got {self.horizon_steps}")
-        if not 0.0 < self.dt_s <= 0.5:
-            raise ValueError(f"dt_s must be in (0, 0.5] s, got {self.dt_s}")
-        if not 0.0 < self.utilization_factor <= 1.0:
-            raise ValueError(
-                f"utilization_factor must be in (0, 1], got {self.utilization_factor}"
-            )
-        if self.polygon_sides < 12 or self.polygon_sides % 2:
-            raise ValueError(
-                f"polygon_sides must be an even number >= 12, got {self.polygon_sides}"
-            )
-        if self.backend not in ("acados", "casadi"):
-            raise ValueError(f"backend must be 'acados' or 'casadi', got {self.backend!r}")
-        if not 0.0 < self.max_cruise_accel_mps2 <= 10.0:
-            raise ValueError(
-                f"max_cruise_accel_mps2 must be in (0, 10] m/s², got {self.max_cruise_accel_mps2}"
-            )
-        if not 0.0 < self.reference_braking_fraction <= 1.0:
-            raise ValueError("reference_braking_fraction must be in (0, 1], "
-                             f"got {self.reference_braking_fraction}")
-        if not 1 <= self.cold_start_iterations <= 20:
-            raise ValueError(
-                f"cold_start_iterations must be in [1, 20], got {self.cold_start_iterations}"
-            )
-        if self.lane_d_min_m >= self.lane_d_max_m:
-            raise ValueError("lane_d_min_m must be below lane_d_max_m")
-
-
 # Range of μ̂ the planner accepts per stage; finite values outside are clipped to it (see
 # :mod:`mufusion.planner.safeguards` for non-finite ones).
 MU_MIN = 0.05
 MU_MAX = 2.0
-
 
 MIN_LOAD_SHARE = 0.05
 """Floor of an axle's normal load in the polygons, as a share of the weight."""

@@ -26,23 +26,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.planner.backend import PlannerBackend
-from mufusion.planner.minimal_risk import minimal_risk_rollout
-from mufusion.planner.ocp import (
+from mufusion.planner.config import (
     PLANNER_MODES,
     CostWeights,
     PlannerConfig,
     PlannerMode,
     PlannerObstacle,
 )
+from mufusion.planner.minimal_risk import minimal_risk_rollout
 from mufusion.planner.passing import in_path
 from mufusion.planner.plan import FallbackReason, Plan
 from mufusion.planner.rti import Iterated, StepProblem, iterate, plan_of
 from mufusion.planner.safeguards import FrictionProfile, SanitizedFriction
-from mufusion.planner.sampling import (
-    SamplingConfig,
-    rk4_step,
-    sampled_guess,
-)
+from mufusion.planner.sampling import SamplingConfig, rk4_step, sampled_guess
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,

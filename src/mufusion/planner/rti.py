@@ -17,10 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.planner.backend import PlannerBackend
+from mufusion.planner.config import PlannerConfig, PlannerMode, PlannerObstacle
 from mufusion.planner.ocp import (
-    PlannerConfig,
-    PlannerMode,
-    PlannerObstacle,
     axle_loads_n,
     lateral_corridor,
     plan_polygon_radii_n,

@@ -18,7 +18,7 @@ its front forces lie within the front friction polygons, its rear forces within 
 (at stage 0 the rear's longitudinal force only: its lateral force is the measured state's) and
 its longitudinal forces within the actuator bounds (each up to a tolerance), and its states
 are plausible: speed within ``[0, MAX_SPEED_MPS]``, ``d`` within the corridor and the heading
-error bounded (tolerances in :class:`~mufusion.planner.ocp.PlausibilityLimits`).
+error bounded (tolerances in :class:`~mufusion.planner.config.PlausibilityLimits`).
 """
 
 from __future__ import annotations

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mufusion.planner.ocp import PlannerConfig, PlannerObstacle, longitudinal_force_bounds_n
+from mufusion.planner.config import PlannerConfig, PlannerObstacle
+from mufusion.planner.ocp import longitudinal_force_bounds_n
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
     MIN_SPEED_FOR_SLIP_MPS,

@@ -17,7 +17,7 @@ import numpy as np
 
 from mufusion.configurations import FrictionSource
 from mufusion.planner import Plan, PlannerMemory, PlannerObstacle
-from mufusion.planner.ocp import PlannerMode
+from mufusion.planner.config import PlannerMode
 from mufusion.sim.settings import LoopRates  # the scenario schema reads it from there
 from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.plant import PlantOutput, PlantStateVector

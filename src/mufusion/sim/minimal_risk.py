@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.configurations import FrictionEstimate
-from mufusion.planner.ocp import PlannerMode
+from mufusion.planner.config import PlannerMode
 from mufusion.planner.safety import SafetySettings
 from mufusion.sim.events import EventKind, EventSink
 from mufusion.vehicle.actuators import ActuatorCommand
