@@ -6,6 +6,7 @@ import hashlib
 import importlib.util
 import json
 import logging
+from importlib import resources
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -56,100 +57,11 @@ _FORMAT_VERSION = "7"
 # which the caller checks. The setters are those the wrapper's set/cost_set/constraints_set call.
 _ITERATE_C = "mufusion_iterate.c"
 _ITERATE_H = "mufusion_iterate.h"
-_ITERATE_HEADER = """#ifndef MUFUSION_ITERATE_H_
-#define MUFUSION_ITERATE_H_
-#include "acados_solver_{name}.h"
-int custom_update_init_function({name}_solver_capsule* capsule);
-int custom_update_function({name}_solver_capsule* capsule, double* data, int data_len);
-int custom_update_terminate_function({name}_solver_capsule* capsule);
-#endif
-"""
-_ITERATE_SOURCE = """#include "acados_c/ocp_nlp_interface.h"
-#include "mufusion_iterate.h"
-
-int custom_update_init_function({name}_solver_capsule* capsule) {{ (void)capsule; return 0; }}
-
-int custom_update_terminate_function({name}_solver_capsule* capsule)
-{{
-    (void)capsule;
-    return 0;
-}}
-
-/* Walks the layout (returns its length); with act == 0 only counts. */
-static int walk({name}_solver_capsule* capsule, double* data, int write, int act)
-{{
-    ocp_nlp_config* config = capsule->nlp_config;
-    ocp_nlp_dims* dims = capsule->nlp_dims;
-    ocp_nlp_in* in = capsule->nlp_in;
-    ocp_nlp_out* out = capsule->nlp_out;
-    int n = dims->N, size, w[2], used = 1;
-    if (write)
-    {{
-        size = ocp_nlp_dims_get_from_attr(config, dims, out, 0, "lbx");
-        if (act)
-        {{
-            ocp_nlp_constraints_model_set(config, dims, in, 0, "lbx", data + used);
-            ocp_nlp_constraints_model_set(config, dims, in, 0, "ubx", data + used);
-        }}
-        used += size;
-        for (int k = 0; k <= n; k++)
-        {{
-            if (act) {name}_acados_update_params(capsule, k, data + used, {upper}_NP);
-            used += {upper}_NP;
-        }}
-        for (int k = 0; k <= n; k++)
-        {{
-            size = ocp_nlp_dims_get_from_attr(config, dims, out, k, "yref");
-            if (act) ocp_nlp_cost_model_set(config, dims, in, k, "yref", data + used);
-            used += size;
-        }}
-        for (int k = 0; k <= n; k++)
-        {{
-            ocp_nlp_cost_dims_get_from_attr(config, dims, out, k, "W", w);
-            if (act) ocp_nlp_cost_model_set(config, dims, in, k, "W", data + used);
-            used += w[0] * w[1];
-        }}
-        for (int k = 0; k < n; k++)
-        {{
-            size = ocp_nlp_dims_get_from_attr(config, dims, out, k, "ubu");
-            if (act) ocp_nlp_constraints_model_set(config, dims, in, k, "ubu", data + used);
-            used += size;
-        }}
-        for (int bound = 0; bound < 2; bound++)
-        {{
-            const char* field = bound == 0 ? "lbx" : "ubx";
-            for (int k = 1; k <= n; k++)
-            {{
-                size = ocp_nlp_dims_get_from_attr(config, dims, out, k, field);
-                if (act) ocp_nlp_constraints_model_set(config, dims, in, k, field, data + used);
-                used += size;
-            }}
-        }}
-    }}
-    for (int pass = 0; pass < 2; pass++)
-    {{
-        const char* field = pass == 0 ? "x" : "u";
-        for (int k = 0; k < (pass == 0 ? n + 1 : n); k++)
-        {{
-            size = ocp_nlp_dims_get_from_attr(config, dims, out, k, field);
-            if (act && write) ocp_nlp_out_set(config, dims, out, k, field, data + used);
-            else if (act) ocp_nlp_out_get(config, dims, out, k, field, data + used);
-            used += size;
-        }}
-    }}
-    return used;
-}}
-
-int custom_update_function({name}_solver_capsule* capsule, double* data, int data_len)
-{{
-    int write = data[0] == 1.0;
-    if (!write && data[0] != 2.0) return 1;
-    int used = walk(capsule, data, write, 0);
-    if (used == data_len) walk(capsule, data, write, 1);
-    data[0] = (double)used; /* the caller checks that the layout matched */
-    return 0;
-}}
-"""
+# The sources are templates for ``str.format`` (``{name}``, ``{upper}``; literal braces doubled),
+# package resources: their text is part of the problem hash, so an edit regenerates the solvers.
+_TEMPLATES = resources.files("mufusion.planner") / "acados_c"
+_ITERATE_HEADER = (_TEMPLATES / "mufusion_iterate.h.in").read_text(encoding="utf-8")
+_ITERATE_SOURCE = (_TEMPLATES / "mufusion_iterate.c.in").read_text(encoding="utf-8")
 
 
 _WRITE, _READ = 1.0, 2.0
