@@ -91,12 +91,17 @@ class ClosedLoop:
         The vehicle's emulated sensors: the only part of the estimation that reads the true
         friction (default: the paper's, without errors).
 
+    Attributes
+    ----------
+    plan
+        The plan the controller tracks (adopted at the last planning step of :meth:`run`).
+    supervision
+        The run's supervisors (:class:`~mufusion.sim.supervisors.Supervision`: stopping in lane,
+        lane recovery, probing, the minimal-risk manoeuvre), each with what it did.
+
     Notes
     -----
-    The supervisors (:class:`~mufusion.sim.supervisor.Supervisor`: stopping in lane, lane
-    recovery, probing) and the minimal-risk manoeuvre act at each planning step and tick.
-    Reactions, each logged as an event (table ``events``, kinds
-    :class:`~mufusion.sim.events.EventKind`):
+    Reactions, each logged as an event (table ``events``, :class:`~mufusion.sim.events.EventKind`):
 
     - The friction estimate handed to the planner must be finite and at most
       ``safety.max_estimate_age_s`` old (:class:`~mufusion.sim.estimate_guard.EstimateGuard`):
@@ -132,10 +137,9 @@ class ClosedLoop:
             warmup_steps: int = 0) -> RunLog:
         """Simulate ``duration_s`` seconds (or until a collision or the end of the road).
 
-        ``progress`` is called with the simulated time after every planning step (when
-        :attr:`plan` is the plan adopted at that step). Before the clock starts, the planner makes
-        ``warmup_steps`` plans at the initial state without obstacles (and without logging), as
-        if it had been cruising there: its warm start.
+        ``progress(t)`` is called after every planning step (:attr:`plan` is then its plan).
+        Before the clock starts, the planner makes ``warmup_steps`` plans at the initial state
+        without obstacles (and without logging), as if it had been cruising there: its warm start.
 
         Raises
         ------
@@ -156,12 +160,10 @@ class ClosedLoop:
                     self.world.curvature, event),
             MinimalRisk(self.safety, self.params, event),
         )
-        """The run's supervisors: what they did is theirs to tell, after the run too."""
         self._planning = Planning(
             self.planner, self.world, self.params, self.estimate_grid_m, self.reference_speed_mps,
             self.lane_bounds_m, self.obstacle_response, self.emergency_on_obstacle)
         self.plan: Plan | None = None
-        """The plan the controller tracks (adopted at the last planning step)."""
         self._estimation = FrictionEstimation(
             self.friction, self.sensors, self.world, self.params, self.estimate_grid_m)
         for fault in self.faults:
