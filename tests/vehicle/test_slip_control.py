@@ -42,8 +42,9 @@ def test_abs_keeps_the_wheels_rolling_and_restores_lateral_force(params, mu) -> 
     lock_with = _longest_run_s(np.array([r[3] for r in with_abs]), dt)
     # Without slip control the full brake torque locks both axles for the rest of the stop.
     assert lock_without > 1.0
-    # With it no wheel stays locked for more than one ABS cycle ...
-    assert lock_with <= ONE_ABS_CYCLE_S
+    # With it no wheel stays locked beyond 0.1 s (measured 0-0.085 s), far inside one ABS
+    # cycle ...
+    assert lock_with <= 0.1 < ONE_ABS_CYCLE_S
     assert with_abs[-1][5].cycles_front + with_abs[-1][5].cycles_rear >= 2
     # ... and the steered front axle gives lateral force again (a locked tire gives none).
     fy_without = np.mean([r[4] for r in without[:200]])
@@ -129,7 +130,7 @@ def test_the_run_summary_says_whether_a_lock_outlasted_one_abs_cycle() -> None:
     from mufusion.metrics.run_metrics import _wheels
 
     tick = 0.02
-    n = 40
+    n = 60
     slip = np.zeros(n)
     slip[5:5 + round(ONE_ABS_CYCLE_S / tick) + 3] = -1.0  # locked a little over one cycle
     ts = pd.DataFrame({

@@ -269,10 +269,11 @@ def _graded(ts: pd.DataFrame, tick_s: float) -> dict[str, Any]:
 LOCKED_SLIP = -0.9
 """A wheel whose slip ratio is at or below this turns at a tenth of its free-rolling speed or
 less: locked (it has lost nearly all its lateral grip)."""
-ONE_ABS_CYCLE_S = 0.2
-"""Longest lock [s] an ABS cycle lets through: the wheel-speed sensor sees a lock coming within
-a few samples and the brake is dumped within the actuator's lag (car 0.05 s, truck 0.15 s);
-production ABS cycles at 2–15 Hz (docs/vehicle.md, "Wheel-slip control")."""
+ONE_ABS_CYCLE_S = 0.5
+"""Longest lock [s] one ABS cycle lets through: production ABS cycles at 2–15 Hz (the slowest,
+pneumatic truck brakes, at 2 Hz), and a lock lasts at most until the dumped brake torque has
+fallen below what the sliding tire returns (a few brake time constants: car 0.05 s, truck
+0.15 s). docs/vehicle.md, "Wheel-slip control"."""
 
 
 def _longest_run_s(flags: np.ndarray, tick_s: float) -> float:
