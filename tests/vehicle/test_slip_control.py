@@ -136,7 +136,7 @@ def test_the_run_summary_says_whether_a_lock_outlasted_one_abs_cycle() -> None:
     ts = pd.DataFrame({
         "speed_mps": np.full(n, 10.0), "wheel_slip_front": slip, "wheel_slip_rear": np.zeros(n),
         "slip_control_front": slip < -0.5, "slip_control_rear": np.zeros(n, dtype=bool),
-        "slip_cycles": np.arange(n) // 10,
+        "slip_cycles": np.arange(n) // 15,
     })
     out = _wheels(ts, tick)
     assert out["wheel_lock_max_s"] == pytest.approx(ONE_ABS_CYCLE_S + 3 * tick)
