@@ -134,7 +134,7 @@ def test_the_run_summary_says_whether_a_lock_outlasted_one_abs_cycle() -> None:
     slip = np.zeros(n)
     slip[5:5 + round(ONE_ABS_CYCLE_S / tick) + 3] = -1.0  # locked a little over one cycle
     ts = pd.DataFrame({
-        "speed_mps": np.full(n, 10.0), "body_slip_rad": np.zeros(n),
+        "speed_mps": np.full(n, 10.0), "vx_mps": np.full(n, 10.0), "body_slip_rad": np.zeros(n),
         "wheel_slip_front": slip, "wheel_slip_rear": np.zeros(n),
         "slip_control_front": slip < -0.5, "slip_control_rear": np.zeros(n, dtype=bool),
         "slip_cycles": np.arange(n) // 15,
@@ -144,10 +144,11 @@ def test_the_run_summary_says_whether_a_lock_outlasted_one_abs_cycle() -> None:
     assert out["wheel_lock_within_abs_cycle"] is False
     assert out["slip_control_cycles"] == 3
     # Below 2 m/s a stopped wheel is no lock (the brakes hold the vehicle).
-    out = _wheels(ts.assign(speed_mps=1.0), tick)
+    out = _wheels(ts.assign(speed_mps=1.0, vx_mps=1.0), tick)
     assert out["wheel_lock_max_s"] == 0.0 and out["wheel_lock_within_abs_cycle"] is True
     # Spinning, the wheels roll across their own plane: no lock counted.
     out = _wheels(ts.assign(body_slip_rad=1.5), tick)
     assert out["wheel_lock_max_s"] == 0.0
+    assert _wheels(ts.assign(vx_mps=-3.0), tick)["wheel_lock_max_s"] == 0.0  # backwards
     # A record from before wheel slips were logged: nothing to say.
     assert _wheels(ts.assign(wheel_slip_front=np.nan, wheel_slip_rear=np.nan), tick) == {}

@@ -89,8 +89,8 @@ class RunMetrics:
         (e.g. ``"estimate_fallback×3, minimal_risk×1"``; empty when none).
     wheel_lock_max_s
         Longest time a wheel stayed locked [s]: slip ratio at or below
-        :data:`LOCKED_SLIP` at a speed above :data:`SLIP_MIN_SPEED_MPS`, the vehicle not
-        spinning (``|β|`` ≤ :data:`SPIN_BODY_SLIP_RAD`) (0 if never; ``None`` in
+        :data:`LOCKED_SLIP` moving forwards faster than :data:`SLIP_MIN_SPEED_MPS`, the vehicle
+        not spinning (``|β|`` ≤ :data:`SPIN_BODY_SLIP_RAD`) (0 if never; ``None`` in
         records written before wheel slips were logged). With slip control on it stays within
         one ABS cycle (:data:`ONE_ABS_CYCLE_S`).
     wheel_lock_within_abs_cycle
@@ -289,10 +289,10 @@ def _wheels(ts: pd.DataFrame, tick_s: float) -> dict[str, Any]:
     """Wheel-lock and slip-control outcomes (absent columns: a record from before they were)."""
     if "wheel_slip_front" not in ts or ts["wheel_slip_front"].isna().all():
         return {}
-    # A lock is counted while the vehicle moves and does not spin: sliding sideways (|β| past
-    # SPIN_BODY_SLIP_RAD) its wheels roll across their own plane, where a slip ratio says
-    # nothing about the brakes.
-    moving = (ts["speed_mps"].to_numpy(dtype=float) > SLIP_MIN_SPEED_MPS) & (
+    # A lock is counted while the vehicle moves forwards and does not spin: sliding sideways
+    # (|β| past SPIN_BODY_SLIP_RAD) or backwards after a spin its wheels roll across or against
+    # their own plane, where a slip ratio says nothing about the brakes.
+    moving = (ts["vx_mps"].to_numpy(dtype=float) > SLIP_MIN_SPEED_MPS) & (
         np.abs(ts["body_slip_rad"].to_numpy(dtype=float)) <= SPIN_BODY_SLIP_RAD)
     locked = moving & (
         (ts["wheel_slip_front"].to_numpy(dtype=float) <= LOCKED_SLIP)
