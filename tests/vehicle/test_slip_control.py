@@ -42,8 +42,9 @@ def test_abs_keeps_the_wheels_rolling_and_restores_lateral_force(params, mu) -> 
     lock_with = _longest_run_s(np.array([r[3] for r in with_abs]), dt)
     # Without slip control the full brake torque locks both axles for the rest of the stop.
     assert lock_without > 1.0
-    # With it no wheel stays locked for more than one ABS cycle ...
-    assert lock_with <= ONE_ABS_CYCLE_S
+    # With it no wheel stays locked beyond 0.1 s (measured 0-0.085 s), far inside one ABS
+    # cycle ...
+    assert lock_with <= 0.1 < ONE_ABS_CYCLE_S
     assert with_abs[-1][5].cycles_front + with_abs[-1][5].cycles_rear >= 2
     # ... and the steered front axle gives lateral force again (a locked tire gives none).
     fy_without = np.mean([r[4] for r in without[:200]])
@@ -129,20 +130,25 @@ def test_the_run_summary_says_whether_a_lock_outlasted_one_abs_cycle() -> None:
     from mufusion.metrics.run_metrics import _wheels
 
     tick = 0.02
-    n = 40
+    n = 60
     slip = np.zeros(n)
     slip[5:5 + round(ONE_ABS_CYCLE_S / tick) + 3] = -1.0  # locked a little over one cycle
     ts = pd.DataFrame({
-        "speed_mps": np.full(n, 10.0), "wheel_slip_front": slip, "wheel_slip_rear": np.zeros(n),
+        "speed_mps": np.full(n, 10.0), "vx_mps": np.full(n, 10.0), "body_slip_rad": np.zeros(n),
+        "wheel_slip_front": slip, "wheel_slip_rear": np.zeros(n),
         "slip_control_front": slip < -0.5, "slip_control_rear": np.zeros(n, dtype=bool),
-        "slip_cycles": np.arange(n) // 10,
+        "slip_cycles": np.arange(n) // 15,
     })
     out = _wheels(ts, tick)
     assert out["wheel_lock_max_s"] == pytest.approx(ONE_ABS_CYCLE_S + 3 * tick)
     assert out["wheel_lock_within_abs_cycle"] is False
     assert out["slip_control_cycles"] == 3
     # Below 2 m/s a stopped wheel is no lock (the brakes hold the vehicle).
-    out = _wheels(ts.assign(speed_mps=1.0), tick)
+    out = _wheels(ts.assign(speed_mps=1.0, vx_mps=1.0), tick)
     assert out["wheel_lock_max_s"] == 0.0 and out["wheel_lock_within_abs_cycle"] is True
+    # Spinning, the wheels roll across their own plane: no lock counted.
+    out = _wheels(ts.assign(body_slip_rad=1.5), tick)
+    assert out["wheel_lock_max_s"] == 0.0
+    assert _wheels(ts.assign(vx_mps=-3.0), tick)["wheel_lock_max_s"] == 0.0  # backwards
     # A record from before wheel slips were logged: nothing to say.
     assert _wheels(ts.assign(wheel_slip_front=np.nan, wheel_slip_rear=np.nan), tick) == {}

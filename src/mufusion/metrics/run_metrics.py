@@ -90,7 +90,8 @@ class RunMetrics:
         (e.g. ``"estimate_fallback×3, minimal_risk×1"``; empty when none).
     wheel_lock_max_s
         Longest time a wheel stayed locked [s]: slip ratio at or below
-        :data:`LOCKED_SLIP` at a speed above :data:`SLIP_MIN_SPEED_MPS` (0 if never; ``None`` in
+        :data:`LOCKED_SLIP` moving forwards faster than :data:`SLIP_MIN_SPEED_MPS`, the vehicle
+        not spinning (``|β|`` ≤ :data:`SPIN_BODY_SLIP_RAD`) (0 if never; ``None`` in
         records written before wheel slips were logged). With slip control on it stays within
         one ABS cycle (:data:`ONE_ABS_CYCLE_S`).
     wheel_lock_within_abs_cycle
@@ -270,10 +271,11 @@ def _graded(ts: pd.DataFrame, tick_s: float) -> dict[str, Any]:
 LOCKED_SLIP = -0.9
 """A wheel whose slip ratio is at or below this turns at a tenth of its free-rolling speed or
 less: locked (it has lost nearly all its lateral grip)."""
-ONE_ABS_CYCLE_S = 0.2
-"""Longest lock [s] an ABS cycle lets through: the wheel-speed sensor sees a lock coming within
-a few samples and the brake is dumped within the actuator's lag (car 0.05 s, truck 0.15 s);
-production ABS cycles at 2–15 Hz (docs/vehicle.md, "Wheel-slip control")."""
+ONE_ABS_CYCLE_S = 0.5
+"""Longest lock [s] one ABS cycle lets through: production ABS cycles at 2–15 Hz (the slowest,
+pneumatic truck brakes, at 2 Hz), and a lock lasts at most until the dumped brake torque has
+fallen below what the sliding tire returns (a few brake time constants: car 0.05 s, truck
+0.15 s). docs/vehicle.md, "Wheel-slip control"."""
 
 
 def _longest_run_s(flags: np.ndarray, tick_s: float) -> float:
@@ -288,7 +290,11 @@ def _wheels(ts: pd.DataFrame, tick_s: float) -> dict[str, Any]:
     """Wheel-lock and slip-control outcomes (absent columns: a record from before they were)."""
     if "wheel_slip_front" not in ts or ts["wheel_slip_front"].isna().all():
         return {}
-    moving = ts["speed_mps"].to_numpy(dtype=float) > SLIP_MIN_SPEED_MPS
+    # A lock is counted while the vehicle moves forwards and does not spin: sliding sideways
+    # (|β| past SPIN_BODY_SLIP_RAD) or backwards after a spin its wheels roll across or against
+    # their own plane, where a slip ratio says nothing about the brakes.
+    moving = (ts["vx_mps"].to_numpy(dtype=float) > SLIP_MIN_SPEED_MPS) & (
+        np.abs(ts["body_slip_rad"].to_numpy(dtype=float)) <= SPIN_BODY_SLIP_RAD)
     locked = moving & (
         (ts["wheel_slip_front"].to_numpy(dtype=float) <= LOCKED_SLIP)
         | (ts["wheel_slip_rear"].to_numpy(dtype=float) <= LOCKED_SLIP)

@@ -27,7 +27,7 @@ from mufusion.planner.ocp import (
 )
 from mufusion.planner.plan import FallbackReason, Plan
 from mufusion.planner.safeguards import SanitizedFriction, check_solution
-from mufusion.planner.speed_profile import curve_speed_reference_mps
+from mufusion.planner.speed_profile import curve_speed_reference_mps, lowest_under_axles
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import State, rear_lateral_force_n
 
@@ -89,8 +89,15 @@ def iterate(
         speed_ref: float | np.ndarray = reference_speed_mps
         if cfg.curve_speed_reference and mode in ("cruise", "evade"):
             # Before the stage parameters: those count the sanitised μ̂ of the stages.
+            # The reference brakes with the friction the axles meet when the torque lands
+            # (docs/decisions/0055): the rear axle behind the CoG, the front axle ahead of
+            # it and one torque lag further.
+            mu_ref = lowest_under_axles(
+                mu_of_s, par.cog_to_rear_axle_m,
+                par.cog_to_front_axle_m
+                + max(float(x0[State.vx]), 0.0) * par.torque_time_constant_s)
             speed_ref = curve_speed_reference_mps(
-                guess_x[:, State.s], curvature_of_s, mu_of_s, reference_speed_mps,
+                guess_x[:, State.s], curvature_of_s, mu_ref, reference_speed_mps,
                 cfg.utilization_factor * np.cos(np.pi / cfg.polygon_sides),
                 cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
                 (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2)

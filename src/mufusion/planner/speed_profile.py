@@ -184,6 +184,33 @@ def regain_limited_profile_mps(
     return np.sqrt(np.array(out))
 
 
+def lowest_under_axles(
+    mu_hat_of_s: Callable[[np.ndarray], np.ndarray], behind_m: float, ahead_m: float
+) -> Callable[[np.ndarray], np.ndarray]:
+    """``μ̂(s)`` replaced by the lowest estimate from ``behind_m`` behind to ``ahead_m`` ahead of
+    ``s`` [m] (at those two points and at ``s``).
+
+    For the speed reference with ``s`` the centre of gravity's: where the friction drops, the
+    front axle meets the drop l_f before the CoG does, and a brake torque commanded for the
+    higher friction is still being applied one torque lag later. A reference that braked at the
+    CoG's friction asked for the high friction's deceleration up to the drop, and the front
+    wheels reached the low friction at that torque and locked (docs/decisions/0055).
+
+    Examples
+    --------
+    >>> mu = lowest_under_axles(lambda s: np.where(np.asarray(s) < 10.0, 0.9, 0.3), 1.5, 2.0)
+    >>> mu(np.array([7.0, 8.5, 11.0, 12.0])).tolist()
+    [0.9, 0.3, 0.3, 0.3]
+    """
+
+    def lowest(s_m: np.ndarray) -> np.ndarray:
+        s = np.asarray(s_m, dtype=float)
+        return np.minimum(np.minimum(mu_hat_of_s(s - behind_m), mu_hat_of_s(s)),
+                          mu_hat_of_s(s + ahead_m))
+
+    return lowest
+
+
 def curve_speed_reference_mps(
     stage_s_m: np.ndarray,
     curvature_of_s: Callable[[np.ndarray], np.ndarray],
