@@ -122,6 +122,10 @@ def _wait_for_a_published_run(proc: subprocess.Popen, out: Path) -> None:
     while time.monotonic() < deadline and proc.poll() is None:
         if (out / "runs").is_dir() and any(not p.name.startswith(".") for p in
                                            (out / "runs").iterdir()):
+            # A worker publishes its run's directory before the command hears of it: on a busy
+            # machine a signal sent at once can arrive in between (measured: 0 completed). Give
+            # the command a moment to record it, as a scheduler's signal comes at no set time.
+            time.sleep(2.0)
             return
         time.sleep(0.05)
 

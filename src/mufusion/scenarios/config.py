@@ -9,223 +9,31 @@ the scenario's name.
 
 from __future__ import annotations
 
-import math
-from typing import Annotated, Any, Literal, TypeVar
+from typing import Annotated, Literal, TypeVar
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
 
-from mufusion.estimators import ErrorModel
-from mufusion.planner.ocp import PlannerConfig
 from mufusion.planner.safety import SafetySettings
 from mufusion.road import FrictionMap, Obstacle, Road, straight_road, turn_road
+from mufusion.scenarios.sections import (
+    FOOTPRINT_MARGIN_M,
+    EstimationConfig,
+    InitialPerturbation,
+    NonNegFloat,
+    ObstacleConfig,
+    PlannerSettings,
+    RoadConfig,
+    SimSettings,
+    TurnFriction,
+    TurnGeometry,
+    UniformFriction,
+    VehicleName,
+    _Strict,
+)
 from mufusion.sim.faults import Fault
 from mufusion.sim.settings import LaneRecoverySettings, LoopRates, ProbingSettings
 from mufusion.vehicle.params import VehicleParams
-from mufusion.vehicle.slip_control import SlipControlSettings
-from mufusion.vehicle.surface_tires import (
-    AUTHORS_TIRES,
-    AUTHORS_TIRES_INTERPOLATED,
-    SurfaceTireTable,
-)
-
-VehicleName = Literal["truck", "car"]
-"""The vehicle presets (:data:`mufusion.vehicle.params.PRESETS`; a test keeps them in step)."""
-
-PositiveFloat = Annotated[float, Field(gt=0.0, allow_inf_nan=False)]
-NonNegFloat = Annotated[float, Field(ge=0.0, allow_inf_nan=False)]
-Friction = Annotated[float, Field(gt=0.0, le=1.5, allow_inf_nan=False)]
-
-FOOTPRINT_MARGIN_M = 0.1
-"""Extra room the planner keeps between its reference point's bounds and the lane edges [m]:
-the planner bounds its reference point (and takes a curve's bulge off the outer side); the
-footprint's corners reach further still when the vehicle is yawed against the lane, and the plant
-tracks the plan to about a decimetre at the friction limit."""
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True)
-
-    @model_validator(mode="before")
-    @classmethod
-    def _no_bool_for_numbers(cls, data: Any) -> Any:
-        # Pydantic would read `true` as 1.0: a boolean is never a number here.
-        if isinstance(data, dict):
-            for key, value in data.items():
-                field = cls.model_fields.get(key)
-                if field is not None and isinstance(value, bool) and field.annotation is not bool:
-                    raise ValueError(
-                        f"{key}: expected a number, got the boolean {str(value).lower()}"
-                    )
-        return data
-
-
-class RoadConfig(_Strict):
-    lane_width_m: Annotated[float, Field(ge=2.5, le=5.0)] = 3.5
-    approach_m: Annotated[float, Field(ge=10.0, le=500.0)] = 60.0
-    """Straight road behind the vehicle's start position (room for the start and the look-back)."""
-    length_m: Annotated[float, Field(ge=50.0, le=2000.0)] = 300.0
-    """Total length of a straight road (``popup``) or of the straight after the turn (``turn``)."""
-
-
-class TurnGeometry(_Strict):
-    radius_m: Annotated[float, Field(ge=10.0, le=500.0)] = 28.0
-    angle_rad: Annotated[float, Field(gt=0.0, le=math.pi)] = math.pi / 2
-    """Heading change of the whole turn, clothoids included [rad]."""
-    direction: Literal["left", "right"] = "right"
-    """Right-hand traffic: in a right turn the outside of the curve is the opposing lane."""
-    start_ahead_m: Annotated[float, Field(ge=0.0, le=200.0)] = 20.0
-    """Distance from the vehicle's start to the beginning of the curve (its entry clothoid)."""
-    clothoid_m: Annotated[float, Field(ge=0.0, le=50.0)] = 5.0
-
-    @model_validator(mode="after")
-    def _clothoids_fit(self) -> TurnGeometry:
-        if self.clothoid_m > self.radius_m * self.angle_rad:
-            raise ValueError(
-                f"clothoid_m must be <= radius_m * angle_rad = "
-                f"{self.radius_m * self.angle_rad:.2f} m, got {self.clothoid_m}"
-            )
-        return self
-
-
-class TurnFriction(_Strict):
-    mu_before: Friction = 0.8
-    """Friction before the change point."""
-    mu_turn: Friction = 0.4
-    """Friction from the change point on."""
-    change_ahead_m: Annotated[float, Field(ge=-50.0, le=200.0)] = 0.0
-    """Where the friction changes, relative to the vehicle's start (paper: at s = 0)."""
-
-
-class UniformFriction(_Strict):
-    mu: Friction = 1.0
-    """Friction everywhere."""
-
-
-class ObstacleConfig(_Strict):
-    distance_m: Annotated[float, Field(gt=0.0, le=200.0)] = 20.0
-    """Distance from the vehicle's front to the obstacle's centre when it appears."""
-    lateral_offset_m: Annotated[float, Field(ge=-5.0, le=5.0)] = 0.0
-    """Offset of the obstacle centre from the lane centre (left positive)."""
-    length_m: PositiveFloat = 1.0
-    width_m: PositiveFloat = 1.0
-    appear_at_s: NonNegFloat = 0.0
-    """Time at which it appears [s]."""
-
-
-class EstimationConfig(_Strict):
-    local_error: ErrorModel = "none"
-    predictive_error: ErrorModel = "none"
-    initial_local_mu: Friction | None = None
-    """The local estimator's held value before it first becomes available; ``None``: what it
-    measured (with its error model) on the road under the vehicle just before the run starts."""
-    length_scale_m: Annotated[float, Field(gt=0.0, le=500.0)] | None = None
-    """GP length scale; ``None`` keeps the fusion's default."""
-    local_timing: Literal["paper", "authors"] = "paper"
-    """When the slip-based estimator samples and publishes (``docs/estimators.md``): the paper's
-    once per planning step, or the authors' 4 Hz front-axle samples with a 3-sample buffer."""
-    class_table: Literal["paper", "authors"] = "paper"
-    """The camera's surface classes: the paper's Table I or the authors' 0.3-wide classes."""
-
-
-class PlannerSettings(_Strict):
-    horizon_steps: Annotated[int, Field(ge=10, le=80)] = 40
-    dt_s: Annotated[float, Field(gt=0.01, le=0.5)] = 0.1
-    utilization_factor: Annotated[float, Field(gt=0.0, le=1.0)] = 0.9
-    backend: Literal["acados", "casadi"] = "acados"
-    use_sampling: bool = True
-    rate_hz: Annotated[float, Field(ge=1.0, le=50.0)] = 10.0
-    obstacle_margin_m: Annotated[float, Field(ge=0.0, le=3.0)] = 0.5
-    """Room the planner keeps between the vehicle's side and an obstacle's side [m]."""
-    stiffness: Literal["fixed", "from_mu_hat"] = "fixed"
-    """Cornering stiffness of the planner's rear tire and the controller's inverse tire model:
-    ``fixed`` (the vehicle's tire on every surface) or ``from_mu_hat`` (the plant's tire table,
-    ``sim.tires``, at the estimate μ̂, as the authors' planner and controller computed it)."""
-    curve_speed_reference: bool = True
-    """Track the highest speed a point mass could hold along the road with μ̂ (curves and
-    friction ahead, beyond the horizon) instead of the cruise speed alone
-    (``docs/feasibility.md``, "GT at the limit")."""
-    # Defaults from their one home, the planner's configuration.
-    reference_braking_fraction: Annotated[float, Field(gt=0.0, le=1.0)] = (
-        PlannerConfig.reference_braking_fraction)
-    """Share of the friction the speed reference's braking ramps before a curve or a lower μ̂
-    assume: 1 brakes as late as the friction polygon allows, less starts earlier and keeps the
-    rest as a reserve (the curves' limit speeds are unchanged). The default 0.8 keeps a fifth
-    of it for the braking that plans lose while they turn in (docs/decisions/0031, "A braking
-    reserve in the speed reference")."""
-    reference_regain_limit: bool = PlannerConfig.reference_regain_limit
-    """In cruise, the speed reference regains speed from the vehicle's own no faster than the
-    drive's acceleration cap on the g-g ellipse allows (less while cornering); ``false``: the
-    reference jumps back to the profile's speed."""
-    steering_rate_limit: bool = True
-    """Plan the front lateral force as a state whose rate the steering actuator's rate limit
-    bounds (:mod:`mufusion.planner.front_force`); ``false``: the forces are free inputs, as in
-    the paper's planner."""
-    load_transfer: bool = True
-    """The friction polygons' radii follow the axle loads of each stage's own planned
-    longitudinal forces (pitch load transfer inside the OCP); ``false``: the loads of the
-    initial guess, as in the paper's planner."""
-    brake_first: bool = True
-    """Stop in front of an obstacle in the path whenever the friction the planner may use
-    allows it (or no side has room), and evade only otherwise; ``false``: evade whenever an
-    obstacle is active, as the paper (:mod:`mufusion.sim.obstacle_response`)."""
-
-
-SimTires = Literal["default", "authors", "authors_interpolated"]
-_SURFACE_TIRES: dict[str, SurfaceTireTable | None] = {
-    "default": None,
-    "authors": AUTHORS_TIRES,
-    "authors_interpolated": AUTHORS_TIRES_INTERPOLATED,
-}
-
-
-class SimSettings(_Strict):
-    plant_rate_hz: Annotated[float, Field(ge=200.0, le=2000.0)] = 200.0
-    controller_rate_hz: Annotated[float, Field(ge=50.0, le=500.0)] = 50.0
-    tires: SimTires = "default"
-    """The plant's tires: ``default`` (stiffness independent of μ, only the peak scales) or the
-    authors' surface-dependent Magic Formula sets per μ under each axle, by interval
-    (``authors``) or interpolated (``authors_interpolated``); docs/estimators.md."""
-    torque_compensation: bool = True
-    """The controller compensates the wheel torques' lag: the forces the plan asks for one
-    torque time constant ahead, plus feedback on the measured torques, so the lagging brakes
-    deliver the plan's forces on time (:class:`mufusion.planner.controller.ControllerGains`);
-    ``false``: the forces planned for now, as in the paper's controller."""
-    abs: bool = True
-    """Anti-lock braking in the vehicle (:mod:`mufusion.vehicle.slip_control`), as on every
-    production car and truck; ``false`` shows what it does."""
-    tcs: bool = True
-    """Traction control in the vehicle (the same controller on drive torque)."""
-
-    def surface_tires(self) -> SurfaceTireTable | None:
-        """The plant's tire table (``None`` for the default tire)."""
-        return _SURFACE_TIRES[self.tires]
-
-    def slip_control(self) -> SlipControlSettings | None:
-        """The vehicle's wheel-slip control (``None`` with ABS and TCS both off)."""
-        if not (self.abs or self.tcs):
-            return None
-        return SlipControlSettings(abs_enabled=self.abs, tcs_enabled=self.tcs)
-
-
-class InitialPerturbation(_Strict):
-    """Half-widths of uniform draws around the initial state; the run's seed draws them.
-
-    All zero (the default): the run starts exactly at the scenario's initial state and draws
-    nothing. Otherwise each run draws a speed, a lateral offset and a heading error uniformly
-    within ``± half-width`` of the scenario's values (:func:`perturbed`), so a campaign with
-    ``seeds = N`` repeats every variant from N nearby starts: an outcome decided by centimetres
-    shows up as a spread, not as one verdict.
-    """
-
-    speed_mps: Annotated[float, Field(ge=0.0, le=2.0, allow_inf_nan=False)] = 0.0
-    lateral_offset_m: Annotated[float, Field(ge=0.0, le=0.5, allow_inf_nan=False)] = 0.0
-    heading_rad: Annotated[float, Field(ge=0.0, le=0.1, allow_inf_nan=False)] = 0.0
-
-    @property
-    def active(self) -> bool:
-        """Whether any half-width is above zero."""
-        return self.speed_mps > 0.0 or self.lateral_offset_m > 0.0 or self.heading_rad > 0.0
 
 
 class _Scenario(_Strict):
@@ -253,7 +61,7 @@ class _Scenario(_Strict):
     estimation: EstimationConfig = EstimationConfig()
     planner: PlannerSettings = PlannerSettings()
     sim: SimSettings = SimSettings()
-    faults: list[Fault] = []
+    faults: list[Fault] = Field(default_factory=list)
     """Faults to inject (``[[faults]]`` tables: kind, start_s, duration_s, delay_s)."""
     safety: SafetySettings = SafetySettings()
     """How the loop reacts to missing, stale or failing parts (:mod:`mufusion.sim.faults`)."""

@@ -23,7 +23,6 @@ State: :class:`~mufusion.vehicle.plant_state.PlantState` (array indices) and
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -38,6 +37,7 @@ from mufusion.vehicle.axles import (
 )
 from mufusion.vehicle.params import TireParams, VehicleParams
 from mufusion.vehicle.plant_kernel import AxleFloats, make_kernel
+from mufusion.vehicle.plant_output import PlantOutput
 from mufusion.vehicle.plant_state import (
     N_PLANT_STATES,
     PlantState,
@@ -48,7 +48,6 @@ from mufusion.vehicle.plant_state import (
 )
 from mufusion.vehicle.slip_control import (
     SlipControlSettings,
-    SlipControlStatus,
     WheelSlipController,
 )
 from mufusion.vehicle.surface_tires import SurfaceTireTable, tire_for_surface
@@ -73,50 +72,6 @@ __all__ = [
 # scheme of :class:`Plant` treats the brake as exact Coulomb friction instead.
 BRAKE_SIGN_SMOOTHING_RADPS = 0.5
 DEFAULT_DT_S = 1.0 / 200.0
-
-
-@dataclass(frozen=True)
-class PlantOutput:
-    """Everything the controller, the estimators and the metrics may read after one plant step.
-
-    ``front`` / ``rear`` hold each axle's forces in its wheel frame, normal load, slips,
-    utilisations and the μ used (:class:`~mufusion.vehicle.axles.AxleOutput`). Accelerations are
-    in the body frame [m/s²] and exclude the velocity-rotation terms (what an IMU would measure).
-    Axle positions: :func:`~mufusion.vehicle.plant_state.axle_positions` of ``x``.
-    """
-
-    x: np.ndarray
-    time_s: float
-    front: AxleOutput
-    rear: AxleOutput
-    accel_x_mps2: float
-    accel_y_mps2: float
-    slip_control: SlipControlStatus | None = None
-    """What the wheel-slip controller (ABS, TCS) did in this step; ``None`` without one."""
-
-    @property
-    def speed_mps(self) -> float:
-        """Speed of the centre of gravity [m/s]."""
-        return math.hypot(self.x[PlantState.VX], self.x[PlantState.VY])
-
-    @property
-    def front_lateral_force_n(self) -> float:
-        """Lateral force of the front axle in the body frame [N]: ``F_x sin δ + F_y cos δ``.
-
-        The planner's ``F_yf`` (its body-frame front force), as a force observer would supply it.
-        """
-        steer = float(self.x[PlantState.STEER])
-        return self.front.fx_n * math.sin(steer) + self.front.fy_n * math.cos(steer)
-
-    @property
-    def utilization_front(self) -> float:
-        """Realised utilisation of the front axle, ``front.utilization``."""
-        return self.front.utilization
-
-    @property
-    def utilization_rear(self) -> float:
-        """Realised utilisation of the rear axle, ``rear.utilization``."""
-        return self.rear.utilization
 
 
 def _command_tuple(command: Any, params: VehicleParams) -> tuple[float, float, float]:
