@@ -15,8 +15,9 @@ from typing import Annotated, NoReturn
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
+
+from mufusion.cli_progress import print_table, progress_bar
 
 app = typer.Typer(
     name="mufusion",
@@ -95,7 +96,7 @@ def run(
     from mufusion.plots.run_figures import single_run_figures
     from mufusion.scenarios.runner import run_scenario
 
-    with _progress() as progress:
+    with progress_bar(console) as progress:
         task = progress.add_task(f"{cfg.name} / {config}", total=cfg.duration_s)
         log = run_scenario(cfg, config, progress=lambda t: progress.update(task, completed=t),
                            planner=planner, controller=controller)
@@ -105,7 +106,7 @@ def run(
     summary = {"scenario": cfg.name, "config": config, **metrics.to_dict()}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     figures = single_run_figures(log, out / "figures", gif=gif)
-    _print_table([summary])
+    print_table([summary])
     console.print(f"log, summary.json and {len(figures)} figures in [bold]{out}[/bold]")
 
 
@@ -153,7 +154,7 @@ def reproduce(
         summary["ablation"] = ablation_runs
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     md, html = write_report(summary, out, figures, explain_differences(runs))
-    _print_table(runs)
+    print_table(runs)
     console.print(f"{len(runs)} runs in {elapsed:.0f} s; report: [bold]{md}[/bold], {html.name}")
 
 
@@ -209,7 +210,7 @@ def campaign(
     started = time.perf_counter()
     pending: list = []
     stopped_by: signal.Signals | None = None  # the signal that left runs pending
-    with _progress() as progress:
+    with progress_bar(console) as progress:
         task = progress.add_task("runs", total=len(specs))
         try:
             results = execute_campaign(
@@ -228,7 +229,7 @@ def campaign(
     summary = write_results(out, results, info, partial=bool(pending), pending=len(pending))
     rows = result_rows(results, out)
     if len(rows) <= MAX_TABLE_ROWS:
-        _print_table(rows)
+        print_table(rows)
     failed = [r for r in rows if r["error"] is not None]
     for row in failed:
         console.print(f"[red]failed:[/red] {row['run']}: {row['error']}")
@@ -378,7 +379,7 @@ def _run_specs(specs: list, out: Path, jobs: int | None) -> tuple[list, list[dic
     """Run a campaign's specs under a progress bar; its results and their ``runs`` entries."""
     from mufusion.campaign import run_campaign
 
-    with _progress() as progress:
+    with progress_bar(console) as progress:
         task = progress.add_task("runs", total=len(specs))
         try:
             results = run_campaign(
@@ -392,21 +393,6 @@ def _run_specs(specs: list, out: Path, jobs: int | None) -> tuple[list, list[dic
         for s, m, d in results
     ]
     return results, runs
-
-
-def _progress() -> Progress:
-    return Progress(
-        TextColumn("[bold]{task.description}"),
-        BarColumn(),
-        TextColumn("{task.completed:.1f}/{task.total:.1f}"),
-        TimeElapsedColumn(),
-        console=console,
-    )
-
-
-def _print_table(rows: list[dict]) -> None:
-    from mufusion.cli_table import print_outcome_table
-    print_outcome_table(rows, Console())
 
 
 if __name__ == "__main__":  # pragma: no cover
