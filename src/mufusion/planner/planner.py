@@ -83,6 +83,9 @@ class PlannerMemory:
     previous: Plan | None
     mu_profile: FrictionProfile | None
     consecutive_fallbacks: int
+    carried: tuple[np.ndarray, np.ndarray] | None = None
+    """A rejected but finite iterate (states, inputs) the next guess continues instead of
+    ``previous``'s own states and inputs (``None``: none)."""
 
 
 def _default_backend(params: VehicleParams, config: PlannerConfig) -> PlannerBackend:
@@ -129,6 +132,7 @@ class TractionAdaptivePlanner:
         self._consecutive_fallbacks = 0
         self._prev: Plan | None = None
         self._mu_profile: FrictionProfile | None = None
+        self._carried: tuple[np.ndarray, np.ndarray] | None = None
         self._backend = backend if backend is not None else _default_backend(params, self.config)
 
     @property
@@ -149,7 +153,8 @@ class TractionAdaptivePlanner:
     @property
     def memory(self) -> PlannerMemory:
         """What the next :meth:`step` continues from (see :class:`PlannerMemory`)."""
-        return PlannerMemory(self._prev, self._mu_profile, self._consecutive_fallbacks)
+        return PlannerMemory(self._prev, self._mu_profile, self._consecutive_fallbacks,
+                             self._carried)
 
     def restore(self, memory: PlannerMemory) -> None:
         """Continue from ``memory`` (taken from :attr:`memory`) instead of the latest step.
@@ -160,12 +165,14 @@ class TractionAdaptivePlanner:
         self._prev = memory.previous
         self._mu_profile = memory.mu_profile
         self._consecutive_fallbacks = memory.consecutive_fallbacks
+        self._carried = memory.carried
 
     def reset(self) -> None:
         """Forget the warm start, the last friction profile and the failure counters, and
         re-initialise the solver (its iterates and memory). The next step is a cold start."""
         self._prev = None
         self._mu_profile = None
+        self._carried = None
         self.failures = 0
         self._consecutive_fallbacks = 0
         self._backend.reset()
@@ -187,8 +194,14 @@ class TractionAdaptivePlanner:
         if prev is not None and np.all(np.isfinite(prev.states)):
             shift = self._previous_shift(x0, t_s)
             if shift is not None:
-                xs = np.concatenate([prev.states[shift:], np.repeat(prev.states[-1:], shift, 0)])
-                us = np.concatenate([prev.inputs[shift:], np.repeat(prev.inputs[-1:], shift, 0)])
+                # After a rejected step the real-time iterations continue from the rejected
+                # iterate (the vehicle follows the shifted plan meanwhile): restarted from the
+                # shifted plan each time, a plan that needs several iterations to converge (a
+                # hard stop before a hairpin) was rejected at every step (docs/decisions/0056).
+                states, inputs = (prev.states, prev.inputs) if self._carried is None else (
+                    self._carried)
+                xs = np.concatenate([states[shift:], np.repeat(states[-1:], shift, 0)])
+                us = np.concatenate([inputs[shift:], np.repeat(inputs[-1:], shift, 0)])
                 xs = xs.copy()
                 xs[0] = x0
                 return xs, us
@@ -351,6 +364,7 @@ class TractionAdaptivePlanner:
 
     def _settle(self, solved: Iterated, mode: PlannerMode) -> tuple[np.ndarray, np.ndarray]:
         """Count the step's outcome; the plan's states and inputs (the guess if it failed)."""
+        self._carried = None
         if solved.reason is FallbackReason.NONE:
             self._consecutive_fallbacks = 0
             return solved.xs, solved.us
@@ -360,7 +374,13 @@ class TractionAdaptivePlanner:
                      "the %s plan", solved.reason.value, solved.status,
                      self._consecutive_fallbacks, self.failures,
                      "minimal-risk" if mode == "minimal_risk" else "shifted")
-        self._reinitialise_backend()
+        if solved.reason is FallbackReason.IMPLAUSIBLE:
+            # Finite and solved, but judged unfit to execute: the next step's iterations
+            # continue from it, and the solver's own iterate stays with it.
+            self._carried = (solved.xs, solved.us)
+        else:
+            # A failed QP can leave NaN multipliers that poison every later RTI step.
+            self._reinitialise_backend()
         return solved.guess_x, solved.guess_u
 
     def _reinitialise_backend(self) -> None:
