@@ -374,9 +374,9 @@ class TractionAdaptivePlanner:
                      "the %s plan", solved.reason.value, solved.status,
                      self._consecutive_fallbacks, self.failures,
                      "minimal-risk" if mode == "minimal_risk" else "shifted")
-        if solved.reason is FallbackReason.IMPLAUSIBLE:
-            # Finite and solved, but judged unfit to execute: the next step's iterations
-            # continue from it, and the solver's own iterate stays with it.
+        if solved.reason is FallbackReason.IMPLAUSIBLE and solved.soft_only:
+            # Finite and solved, outside only the soft rows (not diverged): unfit to execute,
+            # but the next step's iterations continue from it, and the solver keeps its iterate.
             self._carried = (solved.xs, solved.us)
         else:
             # A failed QP can leave NaN multipliers that poison every later RTI step.

@@ -26,7 +26,12 @@ from mufusion.planner.ocp import (
     tracking_reference,
 )
 from mufusion.planner.plan import FallbackReason, Plan
-from mufusion.planner.safeguards import SanitizedFriction, check_solution
+from mufusion.planner.safeguards import (
+    SOFT_CHECKS,
+    SanitizedFriction,
+    check_solution,
+    solution_violations,
+)
 from mufusion.planner.speed_profile import curve_speed_reference_mps, lowest_under_axles
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import State, rear_lateral_force_n
@@ -65,6 +70,9 @@ class Iterated:
     """``NONE`` if every iteration succeeded, else why the last one failed."""
     retried: bool
     """The fast QP failed at some iteration and the robust one was tried."""
+    soft_only: bool = False
+    """An ``IMPLAUSIBLE`` iterate failed only the checks on the OCP's soft rows
+    (:data:`~mufusion.planner.safeguards.SOFT_CHECKS`)."""
 
 
 def iterate(
@@ -84,6 +92,7 @@ def iterate(
     xs, us = guess_x, guess_u
     reason = FallbackReason.NONE
     retried = False
+    soft_only = False
     for _ in range(iterations):
         guess_x, guess_u = xs, us
         speed_ref: float | np.ndarray = reference_speed_mps
@@ -130,12 +139,16 @@ def iterate(
             else:
                 reason = check_solution(xs, us, stage, d_lo, d_hi, par, cfg.polygon_sides,
                                         cfg.plausibility, load_transfer=cfg.load_transfer)
+                if reason is FallbackReason.IMPLAUSIBLE:  # rare: the checks once more
+                    soft_only = set(solution_violations(
+                        xs, us, stage, d_lo, d_hi, par, cfg.polygon_sides, cfg.plausibility,
+                        load_transfer=cfg.load_transfer)) <= SOFT_CHECKS
         except Exception as exc:  # never raise inside the loop
             _log.warning("planner backend raised %r", exc)
             reason = FallbackReason.EXCEPTION
         if reason is not FallbackReason.NONE:
             break
-    return Iterated(xs, us, guess_x, guess_u, stage, status, reason, retried)
+    return Iterated(xs, us, guess_x, guess_u, stage, status, reason, retried, soft_only)
 
 
 def plan_of(
