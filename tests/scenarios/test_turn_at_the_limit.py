@@ -132,3 +132,23 @@ def test_the_marginal_car_on_mu_02_keeps_its_plans_and_its_lane() -> None:
     assert m.feasibility == "marginal"
     assert m.fallbacks == 0 and not m.minimal_risk and not m.spun
     assert m.min_lane_margin_m > 0.2
+
+
+def test_a_hard_stop_before_a_hairpin_converges_instead_of_falling_back() -> None:
+    # Truck at 16 m/s, a 15 m hairpin 20 m ahead, the friction dropping 0.9 → 0.3 at its start
+    # (feasible by the oracle). The first plans must brake hard and ask the rear for more than
+    # its soft polygon further down the horizon: the check rejects them. Restarted from the
+    # shifted plan each time, the real-time iterations never got from cruising to that stop:
+    # eight steps fell back, the minimal-risk stop met the drop and the truck spun 3.82 m out of
+    # its lane. Continued from the rejected iterate, they converge (docs/decisions/0056).
+    cfg = load_scenario("turn", overrides=[
+        "vehicle=truck", "turn.radius_m=15", "turn.angle_rad=3.14159", "initial_speed_mps=16",
+        "duration_s=8", "friction.change_ahead_m=20", "friction.mu_before=0.9",
+        "friction.mu_turn=0.3", "turn.direction=left", "turn.start_ahead_m=20",
+        "turn.clothoid_m=5",
+    ])
+    log = run_scenario(cfg, "GT")
+    m = compute_metrics(log)
+    assert m.feasibility == "feasible"
+    assert not m.minimal_risk and not m.spun and m.fallbacks == 0
+    assert not m.left_lane
