@@ -141,13 +141,11 @@ def test_gt_in_feasible_general_turns_locks_no_wheel_and_keeps_its_lane_on_rises
             f"GT left its lane by {m.max_lane_excursion_m:.2f} m on a rise: {', '.join(drawn)}")
 
 
-# Issue 38's acceptance, not met yet: with the slip control and the speed reference braking with
-# the friction under the axles (docs/decisions/0052-0055) GT still leaves its lane in 12 of the
-# grid's 142 feasible variants (docs/feasibility.md, "The general grids"), all trucks: the 15 m
-# curves with the drop 0.9 → 0.3 at or inside the curve (0.3-3.8 m; at 16 m/s the plans are
-# rejected for the rear polygon from the first step and the minimal-risk stop meets the drop)
-# and four rises on 40 m at 19 m/s (0.33-0.39 m). Some of them are among these draws. Strict:
-# once every draw keeps its lane, this fails until the marker goes.
+# Issue 38's acceptance, not met yet: with docs/decisions/0052-0056 GT still leaves its lane in
+# 10 of the grid's 142 feasible variants (docs/feasibility.md, "The general grids"), all trucks,
+# none spinning: the drop 10 m into the arc of a 15 m curve (0.14-0.50 m) and four rises on
+# 40 m at 19 m/s (0.33-0.39 m). Some of them are among these draws. Strict: once every draw
+# keeps its lane, this fails until the marker goes.
 @pytest.mark.xfail(strict=True, reason="issue 38: GT leaves its lane in feasible drops")
 @pytest.mark.slow
 @seed(38)
