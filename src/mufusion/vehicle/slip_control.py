@@ -18,14 +18,17 @@ per axle, in four phases:
     towards lock; before it, the slip settles).
 ``RELEASE``
     The brake torque is dumped (commanded to zero; the actuator's lag sets how fast it falls)
-    until the wheel re-accelerates relative to the body.
+    until the wheel clearly re-accelerates relative to the body (by ``wheel_accel_margin_mps2``)
+    or its slip is back within ``recovered_slip``.
 ``HOLD``
     The torque reached is held while the wheel spins up, until its slip is back within
-    ``recovered_slip`` (or ``max_hold_s`` has passed).
+    ``recovered_slip`` (or ``max_hold_s`` has passed); a slip beyond ``release_slip`` that still
+    grows starts a new release.
 ``REAPPLY``
-    The torque builds up again from what was held, towards the torque at which the wheel began to
-    lock and beyond, over ``reapply_time_s``; the cycle ends when the command is reached (back to
-    ``PASS``), or a new one starts when the wheel runs away again.
+    The torque jumps back to ``reapply_fraction`` of the torque at which the wheel began to lock
+    (or stays at the held one, if higher) and builds up by that torque every ``reapply_time_s``;
+    the cycle ends when the command is reached (back to ``PASS``), or a new one starts when the
+    wheel runs away again.
 
 Traction control is the same machine on drive torque with the signs mirrored (a spinning wheel
 instead of a locking one). The reference speed is the front wheel's while nothing brakes (neither
