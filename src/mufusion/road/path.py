@@ -16,9 +16,11 @@ import functools
 import math
 from bisect import bisect_right as _bisect_right
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import numpy as np
+
+from mufusion.road._path_py import frame_python, newton_python
+from mufusion.road.segments import PathSegment
 
 _ANCHOR_SPACING_M = 2.0
 # Up to this many points, to_frenet loops over plain floats (faster than numpy for few points).
@@ -39,48 +41,6 @@ def compiled_frames_available() -> bool:
     except ImportError:
         return False
     return True
-
-
-@dataclass(frozen=True)
-class PathSegment:
-    """One centreline piece whose curvature varies linearly from start to end.
-
-    Attributes
-    ----------
-    length_m
-        Arc length [m], > 0.
-    curvature_start_1pm, curvature_end_1pm
-        Curvature at the start and the end [1/m]; left turns positive.
-    """
-
-    length_m: float
-    curvature_start_1pm: float = 0.0
-    curvature_end_1pm: float = 0.0
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.length_m) and self.length_m > 0.0):
-            raise ValueError(f"PathSegment.length_m must be finite and > 0, got {self.length_m!r}")
-        for name in ("curvature_start_1pm", "curvature_end_1pm"):
-            if not math.isfinite(getattr(self, name)):
-                raise ValueError(f"PathSegment.{name} must be finite, got {getattr(self, name)!r}")
-
-    @classmethod
-    def straight(cls, length_m: float) -> PathSegment:
-        """A straight of ``length_m`` [m]."""
-        return cls(length_m, 0.0, 0.0)
-
-    @classmethod
-    def arc(cls, radius_m: float, angle_rad: float) -> PathSegment:
-        """A circular arc of ``radius_m`` [m] turning by ``angle_rad`` (> 0 left, < 0 right)."""
-        if not (radius_m > 0.0 and math.isfinite(radius_m)):
-            raise ValueError(f"radius_m must be finite and > 0, got {radius_m!r}")
-        curvature = math.copysign(1.0 / radius_m, angle_rad)
-        return cls(abs(angle_rad) * radius_m, curvature, curvature)
-
-    @classmethod
-    def clothoid(cls, length_m: float, curvature_start_1pm: float, curvature_end_1pm: float):
-        """A clothoid (curvature linear in s) of ``length_m`` [m]."""
-        return cls(length_m, curvature_start_1pm, curvature_end_1pm)
 
 
 class ReferencePath:
@@ -258,62 +218,10 @@ class ReferencePath:
         xy[1] += beyond * np.sin(heading)
         return xy[0], xy[1], heading, kappa
 
-    def _frame_python(self, s: float) -> tuple[float, float, float, float]:
-        """Plain-float version of :meth:`_frame` for one point."""
-        # min(max(s, 0), length) and min(max(j, 0), last) as comparisons (the same values,
-        # NaN and signed zeros included, without the built-in calls).
-        clamped = 0.0 if 0.0 > s else s
-        length = self.length_m
-        if length < clamped:
-            clamped = length
-        j = _bisect_right(self._py_anchor_s, clamped) - 1
-        j = self._py_last_anchor if self._py_last_anchor < j else (0 if 0 > j else j)
-        a, x, y, start, k0, dk, psi0 = self._py_anchors[j]
-        sigma = clamped - start
-        heading = psi0 + k0 * sigma + 0.5 * dk * sigma * sigma
-        if dk == 0.0:
-            # Straight or arc: the quadrature's integral in closed form, the chord from the
-            # anchor, 2 sin(κΔ/2)/κ long, along the heading at the midpoint (equal to the
-            # 8-point rule to rounding).
-            delta = clamped - a
-            half_turn = 0.5 * k0 * delta
-            chord = delta if half_turn == 0.0 else delta * math.sin(half_turn) / half_turn
-            mid_heading = heading - half_turn
-            x += chord * math.cos(mid_heading)
-            y += chord * math.sin(mid_heading)
-        else:
-            half, mid = 0.5 * (clamped - a), 0.5 * (clamped + a)
-            for node, weight in self._py_gauss:
-                sigma_node = mid + half * node - start
-                psi = psi0 + k0 * sigma_node + 0.5 * dk * sigma_node * sigma_node
-                x += half * weight * math.cos(psi)
-                y += half * weight * math.sin(psi)
-        if s == clamped:
-            return x, y, heading, k0 + dk * sigma
-        beyond = s - clamped
-        return x + beyond * math.cos(heading), y + beyond * math.sin(heading), heading, 0.0
-
-    def _newton_python(
-        self, px: float, py: float, s: float, max_iterations: int
-    ) -> tuple[float, float, float, bool]:
-        """Foot point of ``(px, py)`` by Newton from ``s``: ``(s, d, heading, converged)``."""
-        frame, cos, sin = self._frame_python, math.cos, math.sin
-        for _ in range(max_iterations):
-            cx, cy, heading, kappa = frame(s)
-            tx, ty = cos(heading), sin(heading)
-            ex, ey = px - cx, py - cy
-            d = -ex * ty + ey * tx
-            # Foot point condition (P − C(s))·t(s) = 0; its derivative is −(1 − κ d), floored
-            # at 0.1 (max(·, 0.1) as a comparison).
-            slope = 1.0 - kappa * d
-            step = (ex * tx + ey * ty) / (0.1 if 0.1 > slope else slope)
-            s += step
-            if abs(step) < 1e-9:
-                # At the converged foot point, a step this short moves d by O(κ·step²) (below
-                # rounding) and turns the heading by κ·step: no need to evaluate the frame again.
-                return s, d, heading + kappa * step, True
-        cx, cy, heading, _ = frame(s)
-        return s, -(px - cx) * math.sin(heading) + (py - cy) * math.cos(heading), heading, False
+    # The per-point frame and Newton projection in plain floats (mufusion.road._path_py), the
+    # twins of the compiled _path_c's.
+    _frame_python = frame_python
+    _newton_python = newton_python
 
     def _to_frenet_scalar(self, px: float, py: float) -> tuple[float, float, float]:
         """Global projection of one point: nearest 0.5 m table entry, then Newton."""
