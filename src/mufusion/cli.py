@@ -337,7 +337,7 @@ def calibrate(
     calibration.json and calibration.png and prints the over-estimate rate per distance."""
     import numpy as np
 
-    from mufusion.configurations.calibration import calibrate_fusion
+    from mufusion.fusion.calibration import calibrate_fusion
     from mufusion.plots.calibration import calibration_figure
 
     if horizons < 1:

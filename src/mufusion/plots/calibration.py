@@ -1,6 +1,6 @@
 """Calibration figure of the fusion: over-estimate rate and lower-bound coverage vs distance ahead.
 
-Reads a :class:`~mufusion.configurations.calibration.CalibrationResult` (no simulation). Built on
+Reads a :class:`~mufusion.fusion.calibration.CalibrationResult` (no simulation). Built on
 :class:`matplotlib.figure.Figure` directly: no display, no global pyplot state.
 """
 
@@ -10,7 +10,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from mufusion.configurations.calibration import CalibrationResult
+from mufusion.fusion.calibration import CalibrationResult
 from mufusion.plots._common import CONFIG_COLORS, save_figure
 
 # The fused configurations' colours: paper mode is F, safe mode is F-safe.
@@ -75,7 +75,7 @@ def calibration_figure(result: CalibrationResult, path: str | Path) -> Path:
     --------
     >>> import pathlib, tempfile
     >>> import numpy as np
-    >>> from mufusion.configurations.calibration import calibrate_fusion
+    >>> from mufusion.fusion.calibration import calibrate_fusion
     >>> res = calibrate_fusion(np.random.default_rng(0), n_horizons=50)
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     calibration_figure(res, pathlib.Path(tmp) / "c.png").suffix

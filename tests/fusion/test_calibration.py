@@ -10,7 +10,9 @@ import pytest
 from typer.testing import CliRunner
 
 from mufusion.cli import app
-from mufusion.configurations.calibration import (
+from mufusion.estimators import LOCAL_MAX_ERROR, PAPER_CLASSES, predictive_estimate
+from mufusion.fusion import DEFAULT_GRID_M, GPPrior
+from mufusion.fusion.calibration import (
     NOMINAL_COVERAGE,
     CalibrationHorizons,
     CalibrationResult,
@@ -19,8 +21,6 @@ from mufusion.configurations.calibration import (
     camera_random,
     draw_horizons,
 )
-from mufusion.estimators import LOCAL_MAX_ERROR, PAPER_CLASSES, predictive_estimate
-from mufusion.fusion import DEFAULT_GRID_M, GPPrior
 from mufusion.plots.calibration import build_calibration_figure, calibration_figure
 
 GRID = DEFAULT_GRID_M

@@ -36,15 +36,10 @@ from mufusion.estimators import (
     validate_classes,
 )
 from mufusion.estimators.errors import signed_error
-from mufusion.fusion import (
-    DEFAULT_GRID_M,
-    MODES,
-    PAPER_PRIOR,
-    FusionMode,
-    GPPrior,
-    assemble_inputs_batch,
-    fuse_batch,
-)
+from mufusion.fusion.assembly import DEFAULT_GRID_M, assemble_inputs_batch
+from mufusion.fusion.batch import fuse_batch
+from mufusion.fusion.data import MODES, FusionMode
+from mufusion.fusion.prior import PAPER_PRIOR, GPPrior
 
 NOMINAL_COVERAGE = 0.975
 """One-sided level of the posterior lower bound ``mean − 1.96 std`` [-] (Φ(1.96))."""
