@@ -154,11 +154,11 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
         lo, hi = lateral_corridor(guess, [], LANE[0], LANE[1], TRUCK, 0.5)
         for k in range(n + 1):
             kk = min(k, n - 1)
-            template["_tvp", k, "kappa"] = stage["p"][kk, Param.curvature]
-            template["_tvp", k, "c_r"] = stage["p"][kk, Param.rear_stiffness]
-            template["_tvp", k, "r_f"] = stage["p"][kk, Param.radius_front]
-            template["_tvp", k, "r_r"] = stage["p"][kk, Param.radius_rear]
-            template["_tvp", k, "lam_mu"] = stage["p"][kk, Param.utilized_friction]
+            template["_tvp", k, "kappa"] = stage.p[kk, Param.curvature]
+            template["_tvp", k, "c_r"] = stage.p[kk, Param.rear_stiffness]
+            template["_tvp", k, "r_f"] = stage.p[kk, Param.radius_front]
+            template["_tvp", k, "r_r"] = stage.p[kk, Param.radius_rear]
+            template["_tvp", k, "lam_mu"] = stage.p[kk, Param.utilized_friction]
             template["_tvp", k, "d_lo"] = lo[kk]
             template["_tvp", k, "d_hi"] = hi[kk]
         return template

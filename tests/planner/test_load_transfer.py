@@ -16,7 +16,7 @@ from mufusion.planner.ocp import (
     polygon_rows,
     stage_parameters,
 )
-from mufusion.planner.plan import FallbackReason
+from mufusion.planner.plan import FallbackReason, StageParameters
 from mufusion.planner.safeguards import check_solution
 from mufusion.reproduction.graded import SATURATION
 from mufusion.scenarios import load_scenario
@@ -28,7 +28,7 @@ N = 10
 MU, LAMBDA = 0.8, 0.9
 
 
-def _stage(guess_fx_n: float = 0.0) -> dict[str, np.ndarray]:
+def _stage(guess_fx_n: float = 0.0) -> StageParameters:
     """Stage parameters of a straight guess at 15 m/s with a total braking force ``guess_fx_n``."""
     guess_x = np.zeros((N + 1, N_STATES))
     guess_x[:, State.vx] = 15.0
@@ -57,21 +57,21 @@ def _rows(fxf_n: float, fxr_n: float, fyf_n: float, load_transfer: bool) -> np.n
     state[State.vx] = 15.0
     forces = np.zeros(N_INPUTS)
     forces[Input.fxf], forces[Input.fxr], forces[Input.fyf] = fxf_n, fxr_n, fyf_n
-    return np.asarray(h(state, forces, _stage()["p"][0])).ravel()
+    return np.asarray(h(state, forces, _stage().p[0])).ravel()
 
 
 def test_braking_moves_the_polygon_radii_with_the_load() -> None:
     # 40 kN of braking moves m a_x h / L of load from the rear axle to the front one.
     stage = _stage()
     fzf, fzr = _loads(-40e3)
-    assert fzf > stage["fzf"][0] and fzr < stage["fzr"][0]
+    assert fzf > stage.fzf_n[0] and fzr < stage.fzr_n[0]
     inputs = np.zeros((N, N_INPUTS))
     inputs[:, Input.fxf], inputs[:, Input.fxr] = -25e3, -15e3
     front, rear = plan_polygon_radii_n(inputs, stage, TRUCK, load_transfer=True)
     assert front == pytest.approx(LAMBDA * MU * fzf) and rear == pytest.approx(LAMBDA * MU * fzr)
     # Without load transfer the radii stay the guess's.
     front, rear = plan_polygon_radii_n(inputs, stage, TRUCK, load_transfer=False)
-    assert np.all(front == stage["radius_front"]) and np.all(rear == stage["radius_rear"])
+    assert np.all(front == stage.radius_front_n) and np.all(rear == stage.radius_rear_n)
 
 
 def test_rows_bind_at_the_radius_of_the_stages_own_loads() -> None:
@@ -79,7 +79,7 @@ def test_rows_bind_at_the_radius_of_the_stages_own_loads() -> None:
     # Pure braking on the front axle: the row along −F_x (index 6 of 12: θ = π) binds at
     # F_xf = ratio · λ μ̂ F_zf(a_x), F_zf growing with the braking itself.
     fxr = -10e3
-    fzf0 = _stage()["fzf"][0]
+    fzf0 = _stage().fzf_n[0]
     # F_b = k F_zf with F_zf = F_zf0 + (F_b − fxr) h / L (k = ratio λ μ̂): linear in F_b.
     h, wheelbase = TRUCK.cog_height_m, TRUCK.wheelbase_m
     k = ratio * LAMBDA * MU
@@ -105,7 +105,7 @@ def test_the_solution_check_measures_a_plan_against_its_own_polygons() -> None:
     states[:, State.vx] = 15.0
     inputs = np.zeros((N, N_INPUTS))
     # Front braking 8 % beyond the guess's front radius, within the radius its own load gives.
-    inputs[:, Input.fxf] = -1.08 * stage["radius_front"]
+    inputs[:, Input.fxf] = -1.08 * stage.radius_front_n
     limits = PlausibilityLimits()
     args = (states, inputs, stage, np.full(N, -1.0), np.full(N, 1.0), TRUCK, 12, limits)
     assert check_solution(*args, load_transfer=True) is FallbackReason.NONE
@@ -175,7 +175,7 @@ def test_the_rows_admit_what_the_polygons_faces_admit(n_sides: int, load_transfe
     rows = polygon_rows(n_sides, load_transfer=load_transfer)
     normals, ratio = polygon_directions(n_sides)
     stage = _stage()
-    params = stage["p"][0].copy()
+    params = stage.p[0].copy()
     rng = np.random.default_rng(n_sides)
     inside_count = 0
     for _ in range(400):
@@ -210,7 +210,7 @@ def test_the_solution_check_leaves_stage_0s_rear_lateral_force_to_the_state() ->
     guess_x[:, State.s] = 1.5 * np.arange(N + 1)
     stage = stage_parameters(guess_x, np.zeros((N, N_INPUTS)), lambda s: 0.0 * s,
                              lambda s: 0.2 + 0.0 * s, TRUCK, LAMBDA)
-    radius, stiffness = stage["radius_rear"][0], stage["rear_stiffness"][0]
+    radius, stiffness = stage.radius_rear_n[0], stage.rear_stiffness_n_per_rad[0]
     limits = PlausibilityLimits()
     sliding_vy = -6.0 * radius * 15.0 / stiffness  # F_yr = C_r (l_r ψ̇ − v_y) / v_x
 

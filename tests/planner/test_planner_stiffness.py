@@ -57,23 +57,24 @@ def test_fixed_stiffness_is_the_vehicles_tire_at_every_stage() -> None:
     fixed = stage_parameters(xs, us, lambda s: 0.0 * s, _mu_step, TRUCK, LAMBDA)
     _, fzr = normal_loads_n(np.zeros(N), TRUCK)
     expected = rear_cornering_stiffness_n_per_rad(TRUCK, fzr, LAMBDA)
-    np.testing.assert_array_equal(fixed["rear_stiffness"], expected)
-    assert np.unique(fixed["rear_stiffness"]).size == 1
+    np.testing.assert_array_equal(fixed.rear_stiffness_n_per_rad, expected)
+    assert np.unique(fixed.rear_stiffness_n_per_rad).size == 1
 
 
 def test_stiffness_from_mu_hat_follows_each_stages_estimate() -> None:
     xs, us = _guess()
     stage = stage_parameters(xs, us, lambda s: 0.0 * s, _mu_step, TRUCK, LAMBDA, AUTHORS_TIRES)
-    mu = stage["mu_hat"]
+    mu = stage.mu_hat
     assert set(np.unique(mu)) == {0.4, 0.8}
     for value, b, c in ((0.8, 12.0, 2.3), (0.4, 5.0, 2.0)):
         at = mu == value
         factor = secant_stiffness_factor(tire_for_surface(value, TRUCK.tire, AUTHORS_TIRES),
                                          LAMBDA)
-        np.testing.assert_allclose(stage["rear_stiffness"][at],
-                                   b * c * value * factor * stage["fzr"][at], rtol=1e-12)
+        np.testing.assert_allclose(stage.rear_stiffness_n_per_rad[at],
+                                   b * c * value * factor * stage.fzr_n[at], rtol=1e-12)
     # On the snow stages the authors' planner assumes a rear tire 5.5 times softer.
-    ratio = stage["rear_stiffness"][mu == 0.8][0] / stage["rear_stiffness"][mu == 0.4][0]
+    stiffness = stage.rear_stiffness_n_per_rad
+    ratio = stiffness[mu == 0.8][0] / stiffness[mu == 0.4][0]
     assert ratio == pytest.approx(22.08 * 0.6688 / (4.0 * 0.6214), rel=1e-3)
 
 

@@ -25,6 +25,7 @@ from mufusion.planner.config import PlannerMode as PlannerMode
 from mufusion.planner.config import PlannerObstacle as PlannerObstacle
 from mufusion.planner.config import PlausibilityLimits as PlausibilityLimits
 from mufusion.planner.passing import passing_left
+from mufusion.planner.plan import StageParameters
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -109,14 +110,13 @@ def stage_parameters(
     params: VehicleParams,
     utilization_factor: float,
     stiffness_table: SurfaceTireTable | None = None,
-) -> dict[str, np.ndarray]:
+) -> StageParameters:
     """Per-stage parameters from the initial guess (predicted ``s_k`` and ``a_x,k``).
 
     ``stiffness_table``: ``None`` keeps the rear stiffness of the vehicle's tire; a table makes
     it follow each stage's μ̂ (``PlannerConfig.stiffness = "from_mu_hat"``).
 
-    Returns arrays of length N: ``mu_hat``, ``fzf``, ``fzr``, ``radius_front``, ``radius_rear``,
-    ``rear_stiffness``, ``curvature`` and the stacked ``p`` of shape ``(N, N_PARAMS)``.
+    Returns a :class:`StageParameters`: arrays of length N and the stacked ``p``.
     """
     s_k = guess_states[:-1, State.s]
     fzf, fzr = axle_loads_n(guess_inputs, params)
@@ -135,15 +135,11 @@ def stage_parameters(
     p[:, Param.radius_rear] = radius_rear
     utilized = utilization_factor * mu
     p[:, Param.utilized_friction] = utilized
-    return {
-        "mu_hat": mu, "fzf": fzf, "fzr": fzr, "radius_front": radius_front,
-        "radius_rear": radius_rear, "utilized_friction": utilized, "rear_stiffness": c_r,
-        "curvature": kappa, "p": p,
-    }
+    return StageParameters(mu, fzf, fzr, radius_front, radius_rear, utilized, c_r, kappa, p)
 
 
 def plan_polygon_radii_n(
-    inputs: np.ndarray, stage: dict[str, np.ndarray], params: VehicleParams, load_transfer: bool
+    inputs: np.ndarray, stage: StageParameters, params: VehicleParams, load_transfer: bool
 ) -> tuple[np.ndarray, np.ndarray]:
     """The friction polygons' radii ``(front, rear)`` [N] a plan ``inputs (N, 3)`` was solved with.
 
@@ -151,9 +147,9 @@ def plan_polygon_radii_n(
     ``λ μ̂`` times the loads of the plan's own longitudinal forces (:func:`constraint_expressions`).
     """
     if not load_transfer:
-        return stage["radius_front"], stage["radius_rear"]
+        return stage.radius_front_n, stage.radius_rear_n
     fzf, fzr = axle_loads_n(inputs, params)
-    return stage["utilized_friction"] * fzf, stage["utilized_friction"] * fzr
+    return stage.utilized_friction * fzf, stage.utilized_friction * fzr
 
 
 MAX_SWING_HEADING_RAD = 0.1

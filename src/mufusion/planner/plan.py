@@ -55,3 +55,20 @@ class Plan:
     consecutive_fallbacks: int = 0
     mu_sanitized_stages: int = 0
     mode: str = "cruise"
+
+
+@dataclass(frozen=True)
+class StageParameters:
+    """One solve's per-stage parameters (arrays of length N) from the guess's ``s_k`` and forces:
+    the OCP's ``p (N, N_PARAMS)`` and what the checks and the plan read. Loads and radii [N]
+    (radii ``λ μ̂ F_z`` at the guess's loads), stiffness [N/rad], curvature [1/m]."""
+
+    mu_hat: np.ndarray
+    fzf_n: np.ndarray
+    fzr_n: np.ndarray
+    radius_front_n: np.ndarray
+    radius_rear_n: np.ndarray
+    utilized_friction: np.ndarray
+    rear_stiffness_n_per_rad: np.ndarray
+    curvature_1pm: np.ndarray
+    p: np.ndarray

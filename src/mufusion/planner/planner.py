@@ -302,7 +302,7 @@ class TractionAdaptivePlanner:
                        self._consecutive_fallbacks)
         self._prev = plan
         self._mu_profile = FrictionProfile.from_stages(
-            solved.guess_x[:-1, State.s], solved.stage["mu_hat"])
+            solved.guess_x[:-1, State.s], solved.stage.mu_hat)
         return plan
 
     # -- the stages of one step -----------------------------------------------------------------

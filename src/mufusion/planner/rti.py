@@ -25,7 +25,7 @@ from mufusion.planner.ocp import (
     stage_parameters,
     tracking_reference,
 )
-from mufusion.planner.plan import FallbackReason, Plan
+from mufusion.planner.plan import FallbackReason, Plan, StageParameters
 from mufusion.planner.safeguards import (
     SOFT_CHECKS,
     SanitizedFriction,
@@ -64,7 +64,7 @@ class Iterated:
     us: np.ndarray
     guess_x: np.ndarray
     guess_u: np.ndarray
-    stage: dict[str, np.ndarray]
+    stage: StageParameters
     status: int
     reason: FallbackReason
     """``NONE`` if every iteration succeeded, else why the last one failed."""
@@ -119,13 +119,13 @@ def iterate(
             cfg.obstacle_margin_m, curvature_of_s(guess_x[1:, State.s]),
         )
         yref, weights = tracking_reference(
-            cfg, stage["curvature"], stage["mu_hat"], mode, float(x0[State.vx]),
+            cfg, stage.curvature_1pm, stage.mu_hat, mode, float(x0[State.vx]),
             speed_ref, problem.reference_d_m,
         )
         status = -1
         try:
             status, xs, us = backend.solve(
-                x0, guess_x, guess_u, stage["p"], yref, weights, d_lo, d_hi,
+                x0, guess_x, guess_u, stage.p, yref, weights, d_lo, d_hi,
                 0.0 if braking else cfg.min_speed_mps,
                 # No traction while evading or stopping: the rear tires' friction is kept
                 # for lateral force and braking. In cruise, traction is capped at a heavy
@@ -168,15 +168,15 @@ def plan_of(
     xs, us = states_inputs
     stage = solved.stage
     good = solved.reason is FallbackReason.NONE
-    fyr = rear_lateral_force_n(xs[:-1].T, stage["rear_stiffness"], par)
+    fyr = rear_lateral_force_n(xs[:-1].T, stage.rear_stiffness_n_per_rad, par)
     # The loads and radii the plan was solved with (its own, with load transfer).
     limit_front, limit_rear = plan_polygon_radii_n(us, stage, par, cfg.load_transfer)
-    load_front, load_rear = stage["fzf"], stage["fzr"]
+    load_front, load_rear = stage.fzf_n, stage.fzr_n
     if cfg.load_transfer:
         load_front, load_rear = axle_loads_n(us, par)
     return Plan(
         t0_s=float(t_s), states=xs, inputs=us, rear_lateral_force_n=np.asarray(fyr),
-        mu_hat=stage["mu_hat"], normal_load_front_n=load_front,
+        mu_hat=stage.mu_hat, normal_load_front_n=load_front,
         normal_load_rear_n=load_rear, force_limit_front_n=limit_front,
         force_limit_rear_n=limit_rear, status=int(solved.status), ok=good,
         fallback=not good, solve_time_s=time.perf_counter() - started_s,

@@ -38,7 +38,7 @@ from mufusion.planner.ocp import (
     plan_polygon_radii_n,
     polygon_directions,
 )
-from mufusion.planner.plan import FallbackReason
+from mufusion.planner.plan import FallbackReason, StageParameters
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import Input, State, rear_lateral_force_n
 
@@ -135,7 +135,7 @@ class SanitizedFriction:
 
 
 def judged_rear_rows_n(
-    states: np.ndarray, inputs: np.ndarray, stage: dict[str, np.ndarray],
+    states: np.ndarray, inputs: np.ndarray, stage: StageParameters,
     params: VehicleParams, normals: np.ndarray,
 ) -> np.ndarray:
     """The rear polygon's rows ``(n_sides, N)`` [N] of a solution as :func:`check_solution` judges
@@ -147,7 +147,7 @@ def judged_rear_rows_n(
     every plan of a sliding vehicle is rejected, exactly when it needs one (docs/decisions/0051,
     "A check that judges the solver").
     """
-    fyr = rear_lateral_force_n(np.asarray(states)[:-1].T, stage["rear_stiffness"], params)
+    fyr = rear_lateral_force_n(np.asarray(states)[:-1].T, stage.rear_stiffness_n_per_rad, params)
     fyr[0] = 0.0
     return normals @ np.stack([np.asarray(inputs)[:, Input.fxr], fyr])
 
@@ -155,7 +155,7 @@ def judged_rear_rows_n(
 def solution_violations(
     states: np.ndarray,
     inputs: np.ndarray,
-    stage: dict[str, np.ndarray],
+    stage: StageParameters,
     d_lo: np.ndarray,
     d_hi: np.ndarray,
     params: VehicleParams,
@@ -229,7 +229,7 @@ did not diverge; every other check is on a hard constraint or the state's plausi
 def check_solution(
     states: np.ndarray,
     inputs: np.ndarray,
-    stage: dict[str, np.ndarray],
+    stage: StageParameters,
     d_lo: np.ndarray,
     d_hi: np.ndarray,
     params: VehicleParams,
