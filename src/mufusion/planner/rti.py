@@ -29,8 +29,7 @@ from mufusion.planner.plan import FallbackReason, Plan, StageParameters
 from mufusion.planner.safeguards import (
     SOFT_CHECKS,
     SanitizedFriction,
-    check_solution,
-    solution_violations,
+    judge_solution,
 )
 from mufusion.planner.speed_profile import curve_speed_reference_mps, lowest_under_axles
 from mufusion.vehicle.params import VehicleParams
@@ -137,12 +136,10 @@ def iterate(
             if status not in (0, 2):
                 reason = FallbackReason.SOLVER_STATUS
             else:
-                reason = check_solution(xs, us, stage, d_lo, d_hi, par, cfg.polygon_sides,
-                                        cfg.plausibility, load_transfer=cfg.load_transfer)
-                if reason is FallbackReason.IMPLAUSIBLE:  # rare: the checks once more
-                    soft_only = set(solution_violations(
-                        xs, us, stage, d_lo, d_hi, par, cfg.polygon_sides, cfg.plausibility,
-                        load_transfer=cfg.load_transfer)) <= SOFT_CHECKS
+                reason, failed = judge_solution(xs, us, stage, d_lo, d_hi, par,
+                                                cfg.polygon_sides, cfg.plausibility,
+                                                load_transfer=cfg.load_transfer)
+                soft_only = bool(failed) and set(failed) <= SOFT_CHECKS
         except Exception as exc:  # never raise inside the loop
             _log.warning("planner backend raised %r", exc)
             reason = FallbackReason.EXCEPTION

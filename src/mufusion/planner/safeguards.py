@@ -152,7 +152,7 @@ def judged_rear_rows_n(
     return normals @ np.stack([np.asarray(inputs)[:, Input.fxr], fyr])
 
 
-def solution_violations(
+def judge_solution(
     states: np.ndarray,
     inputs: np.ndarray,
     stage: StageParameters,
@@ -163,8 +163,8 @@ def solution_violations(
     limits: PlausibilityLimits,
     *,
     load_transfer: bool,
-) -> tuple[str, ...]:
-    """The solution checks a finite solution fails (see :func:`check_solution`).
+) -> tuple[FallbackReason, tuple[str, ...]]:
+    """Whether a solution may be used, and the checks it fails.
 
     Parameters
     ----------
@@ -186,12 +186,14 @@ def solution_violations(
 
     Returns
     -------
-    tuple of str
-        The checks a finite solution fails, in this order: ``"front polygon"``, ``"rear
-        polygon"``, ``"longitudinal force bounds"``, ``"speed"``, ``"corridor"``, ``"heading
-        error"`` (empty: none).
+    reason, failed
+        ``NONE``, ``NON_FINITE`` or ``IMPLAUSIBLE``, and the checks a finite solution fails, in
+        this order: ``"front polygon"``, ``"rear polygon"``, ``"longitudinal force bounds"``,
+        ``"speed"``, ``"corridor"``, ``"heading error"`` (empty: none, or not finite).
     """
     xs, us = np.asarray(states, dtype=float), np.asarray(inputs, dtype=float)
+    if not (np.isfinite(xs).all() and np.isfinite(us).all()):
+        return FallbackReason.NON_FINITE, ()
     normals, ratio = polygon_directions(n_sides)
     radius_front, radius_rear = plan_polygon_radii_n(us, stage, params, load_transfer)
     front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
@@ -217,11 +219,15 @@ def solution_violations(
         ).any(),
         "heading error": (np.abs(dpsi) > limits.max_heading_error_rad).any(),
     }
-    return tuple(name for name, bad in reasons.items() if bad)
+    failed = tuple(name for name, bad in reasons.items() if bad)
+    if failed:
+        _log.warning("planner solution rejected: outside the %s", ", ".join(failed))
+        return FallbackReason.IMPLAUSIBLE, failed
+    return FallbackReason.NONE, ()
 
 
 SOFT_CHECKS = frozenset({"rear polygon", "corridor"})
-"""The checks of :func:`solution_violations` on the OCP's soft rows: a solution outside them by
+"""The checks of :func:`judge_solution` on the OCP's soft rows: a solution outside them by
 more than the tolerance traded its slack for the rest (a plan at the edge of what it can do), it
 did not diverge; every other check is on a hard constraint or the state's plausibility."""
 
@@ -239,13 +245,6 @@ def check_solution(
     load_transfer: bool,
 ) -> FallbackReason:
     """``FallbackReason.NONE`` if a solution may be used, else why not (``NON_FINITE`` or
-    ``IMPLAUSIBLE``); the parameters are :func:`solution_violations`'."""
-    xs, us = np.asarray(states, dtype=float), np.asarray(inputs, dtype=float)
-    if not (np.isfinite(xs).all() and np.isfinite(us).all()):
-        return FallbackReason.NON_FINITE
-    failed = solution_violations(xs, us, stage, d_lo, d_hi, params, n_sides, limits,
-                                 load_transfer=load_transfer)
-    if failed:
-        _log.warning("planner solution rejected: outside the %s", ", ".join(failed))
-        return FallbackReason.IMPLAUSIBLE
-    return FallbackReason.NONE
+    ``IMPLAUSIBLE``): :func:`judge_solution`'s reason."""
+    return judge_solution(states, inputs, stage, d_lo, d_hi, params, n_sides, limits,
+                          load_transfer=load_transfer)[0]
