@@ -32,6 +32,10 @@ class Obstacle:
     appear_at_time_s
         The obstacle appears at this time [s] (None: no such trigger). Without any trigger it is
         present from the start; with both, whichever comes first.
+    speed_mps
+        Constant speed along the reference path [m/s]: positive moves with the ego vehicle's
+        direction of travel, negative towards it (oncoming); 0 (the default) is static. ``s_m``
+        is the centre's progress at time 0 (:meth:`s_at_time`).
     """
 
     s_m: float
@@ -40,15 +44,31 @@ class Obstacle:
     width_m: float = 1.0
     appear_at_ego_s_m: float | None = None
     appear_at_time_s: float | None = None
+    speed_mps: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("s_m", "d_m"):
+        for name in ("s_m", "d_m", "speed_mps"):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"Obstacle.{name} must be finite, got {getattr(self, name)!r}")
         for name in ("length_m", "width_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"Obstacle.{name} must be finite and > 0, got {value!r}")
+
+    @property
+    def moving(self) -> bool:
+        """Whether the obstacle moves (``speed_mps != 0``)."""
+        return self.speed_mps != 0.0
+
+    def s_at_time(self, time_s: float) -> float:
+        """The centre's progress along the path at ``time_s`` [s] [m].
+
+        Examples
+        --------
+        >>> Obstacle(100.0, 3.5, speed_mps=-10.0).s_at_time(2.0)
+        80.0
+        """
+        return self.s_m + self.speed_mps * time_s
 
     @classmethod
     def pop_up(
