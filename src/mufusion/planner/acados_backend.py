@@ -13,7 +13,12 @@ from typing import Any
 
 import numpy as np
 
-from mufusion.planner.acados_loader import AcadosUnavailable, cache_dir, load_acados_template
+from mufusion.planner.acados_loader import (
+    AcadosUnavailable,
+    build_lock,
+    cache_dir,
+    load_acados_template,
+)
 from mufusion.planner.front_force import (
     FRONT_FORCE,
     augmented_problem,
@@ -112,16 +117,16 @@ class _GeneratedSolver:
         export = cache_dir() / f"tamp_{digest}"
         name = f"tamp_{digest}"
         lib = export / "acados_ocp_solver_pyx.so"
-        if not lib.exists():
-            # The problem description is needed only to generate the code (the hash names it).
-            export.mkdir(parents=True, exist_ok=True)
-            _log.info("generating and compiling the acados solver in %s", export)
-            ocp = _describe(at, params, config, name, export, hpipm_mode)
-            at.AcadosOcpSolver.generate(ocp, json_file=str(export / "ocp.json"))
-            (export / _ITERATE_H).write_text(_ITERATE_HEADER.format(name=name))
-            (export / _ITERATE_C).write_text(
-                _ITERATE_SOURCE.format(name=name, upper=name.upper()))
-            at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
+        with build_lock(export):  # another process may be building this very solver
+            if not lib.exists():
+                # The problem description is needed only to generate the code (the hash names it).
+                _log.info("generating and compiling the acados solver in %s", export)
+                ocp = _describe(at, params, config, name, export, hpipm_mode)
+                at.AcadosOcpSolver.generate(ocp, json_file=str(export / "ocp.json"))
+                (export / _ITERATE_H).write_text(_ITERATE_HEADER.format(name=name))
+                (export / _ITERATE_C).write_text(
+                    _ITERATE_SOURCE.format(name=name, upper=name.upper()))
+                at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
         # The template imports the wrapper by a cwd-relative module path; load it by file instead.
         spec = importlib.util.spec_from_file_location("acados_ocp_solver_pyx", lib)
         if spec is None or spec.loader is None:

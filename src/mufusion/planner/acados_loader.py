@@ -3,7 +3,8 @@
 The wheel's shared libraries carry no RUNPATH and its template expects three environment variables
 and a symlink inside the package (see docs/planner.md). :func:`load_acados_template` sets all of
 that up once and returns the ``acados_template`` module, or raises :class:`AcadosUnavailable`
-so the caller can fall back to the CasADi backend.
+so the caller can fall back to the CasADi backend. :func:`build_lock` keeps processes that share
+the solver cache (campaign workers, parallel test workers) from building one solver at once.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import io
 import logging
 import os
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
 
@@ -32,6 +34,34 @@ def cache_dir() -> Path:
     """Directory for generated solvers: ``$MUFUSION_CACHE_DIR`` or ``~/.cache/mufusion/acados``."""
     env = os.environ.get("MUFUSION_CACHE_DIR")
     return Path(env) if env else Path.home() / ".cache" / "mufusion" / "acados"
+
+
+@contextlib.contextmanager
+def build_lock(export: Path) -> Iterator[None]:
+    """Hold an exclusive lock on the solver directory ``export`` (created if missing).
+
+    Check for the compiled solver and build it inside the lock: a second process that needs the
+    same solver waits for the first one's build and then finds it, instead of generating and
+    compiling into the same files at once (interleaved object files, or a library loaded while
+    the linker still writes it). The generated library names its directory by absolute path, so
+    building elsewhere and renaming is not an option. The lock is ``flock`` on ``.build.lock``
+    in ``export``: the kernel releases it when its holder exits, even killed mid-build.
+
+    Raises
+    ------
+    AcadosUnavailable
+        If the directory or its lock file cannot be created.
+    """
+    import fcntl  # POSIX only, like the acados wheel itself
+
+    try:
+        export.mkdir(parents=True, exist_ok=True)
+        handle = open(export / ".build.lock", "a")
+    except OSError as exc:
+        raise AcadosUnavailable(f"cannot lock the solver directory {export}: {exc}") from exc
+    with handle:  # closing the descriptor releases the lock
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        yield
 
 
 @functools.lru_cache(maxsize=1)
