@@ -4,7 +4,7 @@ Checked on the repository's own files: every relative markdown link under docs/ 
 points to an existing file; every ``docs/decisions/NNNN`` cited anywhere names an existing
 decision record; a ``docs/<page>.md, "Title"`` citation in code, examples or the README names text
 that the page contains; no page in docs/ is longer than 400 lines and docs/experiments.md (the
-current results) stays under 60 KB.
+current results) stays under 60 KB; CI (.ci/run) runs README's test command, as written there.
 """
 
 from __future__ import annotations
@@ -72,6 +72,17 @@ def test_no_page_over_the_line_limit(path: Path) -> None:
 def test_current_results_stay_short() -> None:
     size = len((DOCS / "experiments.md").read_bytes())
     assert size <= MAX_EXPERIMENTS_BYTES, f"docs/experiments.md is {size} bytes"
+
+
+def test_ci_runs_the_readme_test_command() -> None:
+    # README's first code block: the install-and-reproduce command, then the test command.
+    block = re.search(r"```bash\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+    assert block is not None
+    command = block.group(1).splitlines()[1]
+    assert command.startswith("python -m pytest "), command
+    ci = (ROOT / ".ci" / "run").read_text().splitlines()
+    runs = [line for line in ci if "-m pytest" in line and not line.lstrip().startswith("#")]
+    assert len(runs) == 1 and f" {command} >" in runs[0], (command, runs)
 
 
 def test_cited_decision_records_exist() -> None:
