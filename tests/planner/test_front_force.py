@@ -94,9 +94,11 @@ def _s_curve(s):
     return np.where(s < 15.0, 0.0, np.where(s < 30.0, 1.0 / 30.0, -1.0 / 30.0))
 
 
-def _largest_rates(backend: str, rate_limit: bool, steps: int = 25):
+SLOW_STEERING = dataclasses.replace(TRUCK, max_steer_rate_radps=0.3)
+
+
+def _largest_rates(backend: str, vehicle, rate_limit: bool, steps: int = 25):
     """Largest planned |dF_yf/dt| over every plan and over the applied first stages."""
-    vehicle = dataclasses.replace(TRUCK, max_steer_rate_radps=0.3)
     config = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=0.45, use_sampling=False,
                            backend=backend, steering_rate_limit=rate_limit)
     planner = TractionAdaptivePlanner(vehicle, config)
@@ -110,15 +112,18 @@ def _largest_rates(backend: str, rate_limit: bool, steps: int = 25):
         applied.append(plan.inputs[0, Input.fyf])
         x = plan.states[1]
     steps_rate = float(np.abs(np.diff(applied)).max()) / 0.1
-    return planned, steps_rate, front_force_rate_bound_n_per_s(vehicle, config)
+    return planned, steps_rate
 
 
 @pytest.mark.parametrize("backend", ["acados", "casadi"])
 def test_plans_respect_the_steering_rate(backend):
     # An S-bend at 13 m/s asks for ≈ 200 kN/s; a steering of 0.3 rad/s grants ≈ 67 kN/s.
-    free, _, bound = _largest_rates(backend, rate_limit=False)
+    bound = front_force_rate_bound_n_per_s(SLOW_STEERING, PlannerConfig())
+    # Without the rate limit the steering's speed is no part of the problem, so the truck's own
+    # solver (generated for other tests too) plans what the slow steering's would.
+    free, _ = _largest_rates(backend, TRUCK, rate_limit=False)
     assert free > 2.0 * bound  # the case needs the bound
-    planned, applied, bound = _largest_rates(backend, rate_limit=True)
+    planned, applied = _largest_rates(backend, SLOW_STEERING, rate_limit=True)
     assert planned <= bound * (1.0 + 1e-6)
     # From plan to plan too: each starts from the force the previous one commands now.
     assert applied <= bound * (1.0 + 1e-6)
