@@ -74,8 +74,8 @@ class Probe:
         self.inner.reset()
 
 
-def _drive(probe: Probe) -> list:
-    planner = TractionAdaptivePlanner(TRUCK, CONFIG, backend=probe)
+def _drive(probe: Probe, config: PlannerConfig) -> list:
+    planner = TractionAdaptivePlanner(TRUCK, config, backend=probe)
     x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
     plans = []
     for i in range(24):
@@ -97,12 +97,14 @@ def _drive(probe: Probe) -> list:
     return plans
 
 
-@pytest.mark.parametrize("steering_rate_limit", [False, True])
+# The product's problem (front-force state, polygons at the stages' own loads) and the paper's
+# (neither: fewer states and constraint rows, another layout).
+@pytest.mark.parametrize("product", [False, True], ids=["paper", "product"])
 def test_one_call_writes_and_reads_give_the_plans_of_the_per_stage_setters(
-    steering_rate_limit: bool, monkeypatch: pytest.MonkeyPatch
+    product: bool, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    config = dataclasses.replace(CONFIG, steering_rate_limit=steering_rate_limit)
-    got = _drive(Probe(TractionAdaptivePlanner(TRUCK, config).backend))
+    config = dataclasses.replace(CONFIG, steering_rate_limit=product, load_transfer=product)
+    got = _drive(Probe(TractionAdaptivePlanner(TRUCK, config).backend), config)
     reference = TractionAdaptivePlanner(TRUCK, config).backend
     solved: list[int] = []
 
@@ -112,7 +114,7 @@ def test_one_call_writes_and_reads_give_the_plans_of_the_per_stage_setters(
 
     for solver in reference.solvers():  # each generated solver solves through the wrapper
         monkeypatch.setattr(solver, "solve", functools.partial(through_the_wrapper, solver))
-    want = _drive(Probe(reference))
+    want = _drive(Probe(reference), config)
     assert len(solved) >= len(want)  # the reference path, not the one-call writes
     assert not want[17].ok and want[18].ok  # the poisoned solve, then a reset solver
     assert [p.mode for p in want] == [p.mode for p in got]

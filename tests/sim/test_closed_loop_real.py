@@ -60,11 +60,12 @@ def test_hard_evasion_on_the_plant_does_not_spin_the_truck():
 
 def test_cli_run_writes_log_summary_and_figures_and_exits_zero_on_a_crash(tmp_path):
     out = tmp_path / "p"
-    # The paper's free-force planner and controller: P's 40 % under-estimate collides there
-    # (with the plans the steering can follow and the torques' lag compensated, the product's
-    # defaults, P clears the obstacle).
+    # The paper's free-force planner (polygons at the static loads) and controller: P's 40 %
+    # under-estimate collides there (with the plans the steering can follow and the torques' lag
+    # compensated, the product's defaults, P clears the obstacle).
     result = CliRunner().invoke(app, ["run", "popup", "--config", "P", "--set", "duration_s=2",
                                       "--set", "planner.steering_rate_limit=false",
+                                      "--set", "planner.load_transfer=false",
                                       "--set", "sim.torque_compensation=false",
                                       "--out", str(out), "--no-gif"])
     assert result.exit_code == 0, result.output
