@@ -7,12 +7,29 @@ import pytest
 # ``python -m mufusion`` runs the CLI when imported: not a module for doctests.
 collect_ignore = ["src/mufusion/__main__.py"]
 
+# The files that take longest (docs/performance.md, "Tests"), longest first: the whole
+# reproduction (which, on an empty solver cache, also builds the eight solvers of the paper's
+# settings and the authors'), the campaign engines (local Ray instances, bounded waits) and GT's
+# closed loops over the general grids.
+LONGEST_FIRST = (
+    "tests/test_reproduction.py",
+    "tests/campaign/test_campaign_engines.py",
+    "tests/scenarios/test_general_grids.py",
+)
+
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Put the tests marked ``slow`` first, keeping the collection's order otherwise.
+    """Order the tests: the longest files first, then the tests marked ``slow``, then the rest,
+    each in the collection's order.
 
-    With parallel workers (README's ``-n auto``; pyproject distributes whole files, in this order)
-    the long files start at once and the short ones fill the workers' ends, instead of a long file
-    starting last and running alone while the other worker idles.
+    With parallel workers (README's ``-n auto``; pyproject hands out whole files, in this order)
+    the long files start at once and the short ones fill the workers' ends, instead of a long
+    file starting last and running alone while the other worker idles.
     """
-    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+    def rank(item: pytest.Item) -> tuple[int, bool]:
+        path = item.nodeid.partition("::")[0]
+        first = LONGEST_FIRST.index(path) if path in LONGEST_FIRST else len(LONGEST_FIRST)
+        return first, item.get_closest_marker("slow") is None
+
+    items.sort(key=rank)

@@ -90,6 +90,7 @@ def campaign(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return out
 
 
+@pytest.mark.slow  # the campaign and its report: about 8 s, once for both
 def test_the_plugin_rows_stand_beside_the_builtins_in_the_results(campaign: Path) -> None:
     rows = pd.read_csv(campaign / "results.csv")
     assert sorted(rows["config"]) == sorted(["GT", "L", "P", "F", SPEC])
@@ -101,6 +102,7 @@ def test_the_plugin_rows_stand_beside_the_builtins_in_the_results(campaign: Path
     assert plugin["utilization_vs_gt"] == pytest.approx(plugin[key] / gt[key] - 1.0, abs=1e-6)
 
 
+@pytest.mark.slow  # the campaign and its report: about 8 s, once for both
 def test_the_campaign_report_has_a_row_for_the_plugin(campaign: Path) -> None:
     report = (campaign / "report" / "report.md").read_text()
     for config in ("GT", "L", "P", "F", SPEC):

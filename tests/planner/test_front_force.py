@@ -123,6 +123,7 @@ def _largest_rates(backend: str, vehicle, rate_limit: bool, steps: int = 25):
     return planned, steps_rate
 
 
+@pytest.mark.slow  # 50 IPOPT solves with casadi (about 8 s); acados builds its own solver
 @pytest.mark.parametrize("backend", ["acados", "casadi"])
 def test_plans_respect_the_steering_rate(backend):
     # An S-bend at 13 m/s asks for ≈ 200 kN/s; a steering of 0.3 rad/s grants ≈ 67 kN/s.

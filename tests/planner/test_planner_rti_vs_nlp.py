@@ -45,6 +45,7 @@ def _closed_loop(planner, steps=30):
     return np.array(xs)
 
 
+@pytest.mark.slow  # 30 IPOPT solves of the reference NLP each: about 5 s
 @pytest.mark.parametrize("backend", ["casadi"])
 @pytest.mark.parametrize("load_transfer", [True, False])  # one row per face / slabs (ocp.py)
 def test_rti_closed_loop_matches_reference_nlp(backend, load_transfer):
