@@ -17,6 +17,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from mufusion.cli_commonroad import import_commonroad
 from mufusion.cli_progress import print_table, progress_bar
 
 app = typer.Typer(
@@ -30,6 +31,7 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 console = Console(stderr=True)
+app.command("import-commonroad")(import_commonroad)
 
 
 @app.callback()
@@ -68,9 +70,7 @@ def run(
         list[str] | None,
         typer.Option("--set", help="Override a scenario field, e.g. --set friction.mu=0.89."),
     ] = None,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path(
-        "results/run"
-    ),
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output dir.")] = Path("results/run"),
     gif: Annotated[bool, typer.Option(help="Also write an animated GIF of the run.")] = True,
     planner: Annotated[
         str | None,
