@@ -15,6 +15,7 @@ from typing import Annotated
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 console = Console(stderr=True)
 
@@ -25,7 +26,7 @@ DEFAULT_SPEED_MPS = 10.0
 
 
 def _fail(message: str) -> typer.Exit:
-    console.print(f"[red]error:[/red] {message}")
+    console.print(f"[red]error:[/red] {escape(message)}")
     return typer.Exit(code=2)
 
 
@@ -48,11 +49,11 @@ def import_commonroad(
         str | None, typer.Option(help="Route from this lanelet along its successors; where they "
                                  "branch, name the branch: ID,ID,...")] = None,
     length_m: Annotated[
-        float | None, typer.Option(help="Route length [m] (with --lanelet; cuts a planning "
+        float | None, typer.Option(help="Route length in m (with --lanelet; cuts a planning "
                                    "problem's route).")] = None,
     vehicle: Annotated[str, typer.Option(help="truck or car.")] = "truck",
     speed_mps: Annotated[
-        float | None, typer.Option(help="Initial speed [m/s] (default: the planning problem's, "
+        float | None, typer.Option(help="Initial speed in m/s (default: the planning problem's, "
                                    "else 10).")] = None,
     mu: Annotated[
         float | None, typer.Option(help="Friction coefficient everywhere (default: from the "
@@ -86,12 +87,11 @@ def import_commonroad(
         from mufusion.road.commonroad import (
             UNDERGROUND_SURFACE,
             choose_run,
+            clear_of_start,
             import_road,
             read_commonroad,
             road_scenario_toml,
         )
-        from mufusion.road.commonroad.route import INSTALL_HINT
-
         speed_guess = speed_mps or (DEFAULT_SPEED_MPS if chain is not None else None)
         if length_m is not None and speed_guess is not None:
             from mufusion.road.commonroad import min_route_length_m
@@ -100,11 +100,6 @@ def import_commonroad(
             if length_m < need:
                 raise ValueError(f"--length-m {length_m:g} is shorter than a run needs: at least "
                                  f"{need:.0f} m at {speed_guess:g} m/s")
-        try:
-            import commonroad  # noqa: F401  # the extra, before the file is parsed
-        except ImportError:
-            raise ValueError(f"import-commonroad needs the CommonRoad packages: {INSTALL_HINT}") \
-                from None
         source = read_commonroad(file)
         road = import_road(source, problem_id=planning_problem, lanelet_ids=chain,
                            length_m=length_m)
@@ -120,6 +115,8 @@ def import_commonroad(
         run = choose_run(road, speed_mps=min(40.0, speed), preview_s=preview_s,
                          vehicle_length_m=params.length_m, min_run_s=MIN_RUN_S,
                          max_duration_s=120.0)
+        road = clear_of_start(road, run, vehicle_length_m=params.length_m,
+                              vehicle_width_m=params.width_m)
     except ValueError as err:
         raise _fail(str(err)) from None
     if mu is not None:

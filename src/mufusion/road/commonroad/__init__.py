@@ -12,7 +12,7 @@ self-contained.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +20,7 @@ import numpy as np
 from mufusion.road.commonroad.layout import (
     ImportedObstacle,
     LaneWidths,
+    interval_mid,
     lane_widths,
     obstacles_on_route,
     polyline_curvature_1pm,
@@ -35,6 +36,7 @@ __all__ = [
     "LaneWidths",
     "RunChoice",
     "choose_run",
+    "clear_of_start",
     "import_road",
     "polyline_curvature_1pm",
     "read_commonroad",
@@ -132,8 +134,7 @@ def import_road(file: CommonRoadFile, *, problem_id: int | None = None,
                         else route.start_state.position, dtype=float)
         sd = to_frame(route.frame, xy)
         start_s = None if sd is None else sd[0]
-        velocity = route.start_state.velocity
-        start_speed = float(getattr(velocity, "start", velocity))
+        start_speed = interval_mid(route.start_state.velocity)
     origin = (float(points[0, 0]), float(points[0, 1]))
     return ImportedRoad(file.path, route.label, route.lanelet_ids, origin, points - points[0], s,
                         lanes, tuple(obstacles), tuple(dropped), file.underground, start_s,
@@ -184,6 +185,21 @@ def choose_run(road: ImportedRoad, *, speed_mps: float, preview_s: float,
                          f"{speed_mps:g} m/s needs at least {need:.0f} m (--length-m, or a "
                          "lower --speed-mps)")
     return RunChoice(round(start, 2), speed_mps, duration)
+
+
+def clear_of_start(road: ImportedRoad, run: RunChoice, *, vehicle_length_m: float,
+                   vehicle_width_m: float) -> ImportedRoad:
+    """``road`` without the obstacles that overlap the vehicle's body where it starts (a run
+    would begin in a collision); each one dropped gets a message."""
+    kept, dropped = [], list(road.dropped)
+    for o in road.obstacles:
+        if (abs(o.s_m - run.start_s_m) < 0.5 * (vehicle_length_m + o.length_m)
+                and abs(o.d_m) < 0.5 * (vehicle_width_m + o.width_m)):
+            dropped.append(f"obstacle {o.obstacle_id} at s = {o.s_m:.1f} m, d = {o.d_m:.1f} m: "
+                           "overlaps the vehicle at its start")
+        else:
+            kept.append(o)
+    return replace(road, obstacles=tuple(kept), dropped=tuple(dropped))
 
 
 def _fmt(value: float, digits: int) -> str:

@@ -15,8 +15,16 @@ import numpy as np
 
 from mufusion.road.commonroad.route import Route
 
-__all__ = ["ImportedObstacle", "LaneWidths", "lane_widths", "obstacles_on_route",
-           "polyline_curvature_1pm", "reference_points", "to_frame"]
+__all__ = [
+    "ImportedObstacle",
+    "LaneWidths",
+    "interval_mid",
+    "lane_widths",
+    "obstacles_on_route",
+    "polyline_curvature_1pm",
+    "reference_points",
+    "to_frame",
+]
 
 # Spacing of the written polyline [m]: 1 m resolves a 20 m radius with 0.1 % chord error, and at
 # 0.1 mm rounding its three-point curvature is good to ~2e-4 1/m.
@@ -208,7 +216,7 @@ class ImportedObstacle:
     speed_mps: float
 
 
-def _mid(value: Any) -> float:
+def interval_mid(value: Any) -> float:
     """A number, or the middle of a 2018b ``Interval``."""
     if hasattr(value, "start") and hasattr(value, "end"):
         return 0.5 * (float(value.start) + float(value.end))
@@ -264,8 +272,8 @@ def obstacles_on_route(file_scenario: Any, route: Route, s_m: np.ndarray, *,
             dropped.append(f"obstacle {oid} at s = {s:.1f} m, d = {d:.1f} m: off the road")
             continue
         length, width = _extent(obstacle.obstacle_shape)
-        velocity = _mid(getattr(state, "velocity", 0.0) or 0.0)
-        orientation = _mid(getattr(state, "orientation", 0.0) or 0.0)
+        velocity = interval_mid(getattr(state, "velocity", 0.0) or 0.0)
+        orientation = interval_mid(getattr(state, "orientation", 0.0) or 0.0)
         relative = orientation - float(np.interp(s, s_ref, heading))
         kept.append(ImportedObstacle(oid, s, d, length, width, velocity * math.cos(relative)))
     return sorted(kept, key=lambda o: o.s_m), dropped
