@@ -215,19 +215,20 @@ def road_scenario_toml(road: ImportedRoad, run: RunChoice, *, vehicle: str, mu: 
     one friction value everywhere and the obstacles at their positions at time 0.
     """
     lanes = road.lanes
+    nearer = np.minimum(lanes.left_m, lanes.right_m)
     header = [
-        f"# Imported from CommonRoad: {road.source.name} ({road.route_label}; lanelets "
-        f"{', '.join(map(str, road.lanelet_ids))}).",
-        "# Reference path: the route's centre line smoothed by commonroad-clcs curve subdivision,",
-        f"# resampled every {_fmt(road.s_m[1] - road.s_m[0], 2)} m; points relative to the file's "
-        f"({_fmt(road.origin_m[0], 3)}, {_fmt(road.origin_m[1], 3)}) m.",
-        f"# Smallest radius of these points {road.smallest_radius_m:.1f} m. Lane widths are the "
-        "least distances from",
-        f"# the smoothed path to the lanelets' boundaries: own lane 2 × {lanes.ego_width_m / 2:.2f}"
-        f" m (nearer boundary {np.min(np.minimum(lanes.left_m, lanes.right_m)):.2f}–"
-        f"{np.max(np.minimum(lanes.left_m, lanes.right_m)):.2f} m), opposing lane "
-        f"{lanes.opposing_width_m:.2f} m on {100 * lanes.opposing_coverage:.0f} % of the path.",
-        f"# Friction: {mu_source}. Written by `mufusion import-commonroad` (docs/commonroad.md).",
+        f"# Imported from CommonRoad {road.source.name}: {road.route_label}",
+        f"# (lanelets {', '.join(map(str, road.lanelet_ids))}).",
+        "# Path: the route's centre line smoothed by commonroad-clcs curve subdivision, resampled",
+        f"# every {_fmt(road.s_m[1] - road.s_m[0], 2)} m, relative to the file's point "
+        f"({_fmt(road.origin_m[0], 3)}, {_fmt(road.origin_m[1], 3)}) m; smallest radius "
+        f"{road.smallest_radius_m:.1f} m.",
+        f"# Own lane: twice the least distance from the path to the nearer lanelet boundary "
+        f"({nearer.min():.2f} m;",
+        f"# it ranges {nearer.min():.2f}–{nearer.max():.2f} m). Opposing lane: its least width "
+        f"where one is adjacent ({100 * lanes.opposing_coverage:.0f} % of the path).",
+        f"# Friction: {mu_source}.",
+        "# Written by `mufusion import-commonroad` (docs/commonroad.md).",
     ]
     lines = [
         *header,

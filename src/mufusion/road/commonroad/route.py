@@ -65,7 +65,7 @@ class Route:
     Attributes
     ----------
     label
-        What chose it, e.g. ``"planning problem 1"`` or ``"lanelet 84599, 156 m"``.
+        What chose it, e.g. ``"planning problem 1"`` or ``"lanelet 84599 onward, 156 m"``.
     lanelet_ids
         The route's lanelets in driving order.
     frame
@@ -236,7 +236,7 @@ def plan_route(file: CommonRoadFile, *, problem_id: int | None = None,
         if length_m is None:
             raise ValueError("--lanelet needs --length-m (the route's length in metres)")
         centre, ids = _lanelet_route(file, list(lanelet_ids), length_m)
-        label = f"lanelet {','.join(map(str, ids))}, {length_m:g} m"
+        label = f"lanelet {ids[0]} onward, {length_m:g} m"
     try:
         frame = _smoothed_frame(centre)
     except ValueError:
