@@ -55,12 +55,16 @@ def import_commonroad(
     speed_mps: Annotated[
         float | None, typer.Option(help="Initial speed in m/s (default: the planning problem's, "
                                    "else 10).")] = None,
+    smoothing: Annotated[
+        str, typer.Option(help="commonroad-clcs smoothing of the route: curve_subdivision or "
+                          "elastic_band.")] = "curve_subdivision",
     mu: Annotated[
         float | None, typer.Option(help="Friction coefficient everywhere (default: from the "
                                    "file's underground label, else dry).")] = None,
 ) -> None:
     """Import a CommonRoad scenario's route, lanes and obstacles as a `road` scenario TOML."""
     from mufusion.estimators.classes import PAPER_CLASSES
+    from mufusion.road.commonroad import SMOOTHINGS
     from mufusion.scenarios.sections import PlannerSettings
     from mufusion.vehicle.params import PRESETS
 
@@ -72,6 +76,9 @@ def import_commonroad(
             raise ValueError(f"--speed-mps must be in (0, 40] m/s, got {speed_mps}")
         if mu is not None and not 0.1 <= mu <= 1.5:
             raise ValueError(f"--mu must be in [0.1, 1.5], got {mu}")
+        if smoothing not in SMOOTHINGS:
+            raise ValueError(f"--smoothing must be one of {sorted(SMOOTHINGS)}, got "
+                             f"{smoothing!r}")
         if (planning_problem is None) == (lanelet is None):
             raise ValueError("give either --planning-problem ID or --lanelet ID --length-m L")
         if lanelet is not None and length_m is None:
@@ -102,7 +109,7 @@ def import_commonroad(
                                  f"{need:.0f} m at {speed_guess:g} m/s")
         source = read_commonroad(file)
         road = import_road(source, problem_id=planning_problem, lanelet_ids=chain,
-                           length_m=length_m)
+                           length_m=length_m, smoothing=smoothing)
         max_kappa = math.tan(params.max_steer_rad) / params.wheelbase_m
         if road.smallest_radius_m < 1.0 / max_kappa:
             raise ValueError(f"{road.route_label}: the path's smallest radius "
@@ -139,8 +146,9 @@ def import_commonroad(
     lanes = road.lanes
     nearer = np.minimum(lanes.left_m, lanes.right_m)
     console.print(
-        f"{road.route_label}: {road.length_m:.0f} m, smallest radius "
-        f"{road.smallest_radius_m:.1f} m; nearer lane boundary {nearer.min():.2f}–"
+        f"{road.route_label}: {road.length_m:.0f} m, tightest bend R "
+        f"{road.smallest_radius_m:.1f} m (consecutive points {road.smallest_vertex_radius_m:.1f}"
+        f" m); nearer lane boundary {nearer.min():.2f}–"
         f"{nearer.max():.2f} m from the path → own lane "
         f"{lanes.ego_width_m:.2f} m; opposing lane {lanes.opposing_width_m:.2f} m "
         f"({100 * lanes.opposing_coverage:.0f} % of the path); μ {mu_value:g}; "

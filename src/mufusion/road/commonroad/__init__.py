@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from mufusion.road.commonroad.layout import (
+    BEND_BASELINE_M,
     ImportedObstacle,
     LaneWidths,
     interval_mid,
@@ -25,11 +26,20 @@ from mufusion.road.commonroad.layout import (
     obstacles_on_route,
     polyline_curvature_1pm,
     reference_points,
+    smallest_radius_m,
     to_frame,
 )
-from mufusion.road.commonroad.route import CommonRoadFile, plan_route, read_commonroad
+from mufusion.road.commonroad.route import (
+    DEFAULT_SMOOTHING,
+    SMOOTHINGS,
+    CommonRoadFile,
+    plan_route,
+    read_commonroad,
+)
 
 __all__ = [
+    "DEFAULT_SMOOTHING",
+    "SMOOTHINGS",
     "UNDERGROUND_SURFACE",
     "ImportedObstacle",
     "ImportedRoad",
@@ -67,8 +77,8 @@ class ImportedRoad:
     ----------
     source
         The scenario file.
-    route_label, lanelet_ids
-        What chose the route and its lanelets.
+    route_label, lanelet_ids, smoothing
+        What chose the route, its lanelets and the clcs processor that smoothed it.
     origin_m
         The file's coordinates of the path's first point [m]; ``points_m`` are relative to it.
     points_m
@@ -88,6 +98,7 @@ class ImportedRoad:
     source: Path
     route_label: str
     lanelet_ids: tuple[int, ...]
+    smoothing: str
     origin_m: tuple[float, float]
     points_m: np.ndarray
     s_m: np.ndarray
@@ -105,14 +116,23 @@ class ImportedRoad:
 
     @property
     def smallest_radius_m(self) -> float:
-        """The written points' smallest three-point radius [m] (inf on a straight)."""
-        kappa = float(np.max(np.abs(polyline_curvature_1pm(self.points_m))))
-        return math.inf if kappa == 0.0 else 1.0 / kappa
+        """The path's tightest bend [m]: circles through points :data:`~.layout.BEND_BASELINE_M`
+        apart (inf on a straight)."""
+        return smallest_radius_m(self.points_m, BEND_BASELINE_M, self._step_m)
+
+    @property
+    def smallest_vertex_radius_m(self) -> float:
+        """The smallest radius through three consecutive points [m], kinks included."""
+        return smallest_radius_m(self.points_m, self._step_m, self._step_m)
+
+    @property
+    def _step_m(self) -> float:
+        return float(self.s_m[1] - self.s_m[0])
 
 
 def import_road(file: CommonRoadFile, *, problem_id: int | None = None,
                 lanelet_ids: list[int] | None = None, length_m: float | None = None,
-                ) -> ImportedRoad:
+                smoothing: str = DEFAULT_SMOOTHING) -> ImportedRoad:
     """Import a route of a read CommonRoad file (:func:`read_commonroad`).
 
     Parameters are those of :func:`.route.plan_route`.
@@ -122,7 +142,8 @@ def import_road(file: CommonRoadFile, *, problem_id: int | None = None,
     ValueError
         Naming the option or the geometry that makes the route unusable.
     """
-    route = plan_route(file, problem_id=problem_id, lanelet_ids=lanelet_ids, length_m=length_m)
+    route = plan_route(file, problem_id=problem_id, lanelet_ids=lanelet_ids, length_m=length_m,
+                       smoothing=smoothing)
     points, s = reference_points(route)
     lanes = lane_widths(file.scenario, route, s)
     edges = (-0.5 * lanes.ego_width_m, 0.5 * lanes.ego_width_m + lanes.opposing_width_m)
@@ -136,9 +157,9 @@ def import_road(file: CommonRoadFile, *, problem_id: int | None = None,
         start_s = None if sd is None else sd[0]
         start_speed = interval_mid(route.start_state.velocity)
     origin = (float(points[0, 0]), float(points[0, 1]))
-    return ImportedRoad(file.path, route.label, route.lanelet_ids, origin, points - points[0], s,
-                        lanes, tuple(obstacles), tuple(dropped), file.underground, start_s,
-                        start_speed)
+    return ImportedRoad(file.path, route.label, route.lanelet_ids, route.smoothing, origin,
+                        points - points[0], s, lanes, tuple(obstacles), tuple(dropped),
+                        file.underground, start_s, start_speed)
 
 
 @dataclass(frozen=True)
@@ -219,10 +240,12 @@ def road_scenario_toml(road: ImportedRoad, run: RunChoice, *, vehicle: str, mu: 
     header = [
         f"# Imported from CommonRoad {road.source.name}: {road.route_label}",
         f"# (lanelets {', '.join(map(str, road.lanelet_ids))}).",
-        "# Path: the route's centre line smoothed by commonroad-clcs curve subdivision, resampled",
-        f"# every {_fmt(road.s_m[1] - road.s_m[0], 2)} m, relative to the file's point "
-        f"({_fmt(road.origin_m[0], 3)}, {_fmt(road.origin_m[1], 3)}) m; smallest radius "
-        f"{road.smallest_radius_m:.1f} m.",
+        f"# Path: the route's centre line smoothed by commonroad-clcs ({road.smoothing}),",
+        f"# resampled every {_fmt(road.s_m[1] - road.s_m[0], 2)} m, relative to the file's point "
+        f"({_fmt(road.origin_m[0], 3)}, {_fmt(road.origin_m[1], 3)}) m. Tightest bend "
+        f"R {road.smallest_radius_m:.1f} m",
+        f"# (circles through points {_fmt(BEND_BASELINE_M, 1)} m apart; through consecutive "
+        f"points {road.smallest_vertex_radius_m:.1f} m).",
         f"# Own lane: twice the least distance from the path to the nearer lanelet boundary "
         f"({nearer.min():.2f} m;",
         f"# it ranges {nearer.min():.2f}–{nearer.max():.2f} m). Opposing lane: its least width "

@@ -22,9 +22,18 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CommonRoadFile", "Route", "plan_route", "read_commonroad"]
+__all__ = ["DEFAULT_SMOOTHING", "SMOOTHINGS", "CommonRoadFile", "Route", "plan_route",
+           "read_commonroad"]
 
 INSTALL_HINT = "install the extra: pip install 'mufusion[commonroad]'"
+
+SMOOTHINGS: dict[str, str] = {
+    "elastic_band": "ELASTIC_BAND",
+    "curve_subdivision": "CURVE_SUBDIVISION",
+}
+"""The smoothing names the importer accepts → commonroad-clcs ``ProcessingOption`` members
+(each with clcs's default parameters)."""
+DEFAULT_SMOOTHING = "curve_subdivision"
 
 
 @dataclass(frozen=True)
@@ -68,6 +77,8 @@ class Route:
         What chose it, e.g. ``"planning problem 1"`` or ``"lanelet 84599 onward, 156 m"``.
     lanelet_ids
         The route's lanelets in driving order.
+    smoothing
+        The clcs processor that smoothed the centre line (:data:`SMOOTHINGS`).
     frame
         commonroad-clcs's ``CurvilinearCoordinateSystem`` of the smoothed centre line.
     start_state
@@ -78,6 +89,7 @@ class Route:
 
     label: str
     lanelet_ids: tuple[int, ...]
+    smoothing: str
     frame: Any
     start_state: Any
     time_step: int
@@ -103,7 +115,9 @@ def read_commonroad(path: Path) -> CommonRoadFile:
         raise ValueError(f"FILE {str(path)!r} is not a CommonRoad XML file (no <commonRoad> "
                          "element at its start)")
     try:
-        from commonroad.common.file_reader import CommonRoadFileReader
+        with warnings.catch_warnings():  # protobuf's deprecations at import
+            warnings.simplefilter("ignore")
+            from commonroad.common.file_reader import CommonRoadFileReader
     except ImportError:
         raise ValueError(f"reading CommonRoad files needs commonroad-io: {INSTALL_HINT}") from None
     try:
@@ -115,17 +129,19 @@ def read_commonroad(path: Path) -> CommonRoadFile:
     return CommonRoadFile(path, scenario, problems)
 
 
-def _smoothed_frame(centre_m: np.ndarray) -> Any:
-    """The curvilinear frame of ``centre_m`` smoothed by curve subdivision (clcs defaults)."""
+def _smoothed_frame(centre_m: np.ndarray, smoothing: str) -> Any:
+    """The curvilinear frame of ``centre_m`` smoothed by ``smoothing`` (clcs's defaults)."""
     try:
         from commonroad_clcs.clcs import CurvilinearCoordinateSystem
         from commonroad_clcs.config import CLCSParams, ProcessingOption
         from commonroad_clcs.ref_path_processing.factory import ProcessorFactory
     except ImportError:
         raise ValueError(f"the reference path needs commonroad-clcs: {INSTALL_HINT}") from None
-    params = CLCSParams(processing_option=ProcessingOption.CURVE_SUBDIVISION)
-    smoothed = ProcessorFactory.create_processor(params)(np.asarray(centre_m, dtype=float))
-    return CurvilinearCoordinateSystem(smoothed, params, preprocess_path=False)
+    params = CLCSParams(processing_option=ProcessingOption[SMOOTHINGS[smoothing]])
+    with warnings.catch_warnings():  # OSQP (elastic band) warns on every matrix it converts
+        warnings.simplefilter("ignore")
+        smoothed = ProcessorFactory.create_processor(params)(np.asarray(centre_m, dtype=float))
+        return CurvilinearCoordinateSystem(smoothed, params, preprocess_path=False)
 
 
 def _truncate(centre_m: np.ndarray, length_m: float) -> np.ndarray:
@@ -142,8 +158,10 @@ def _truncate(centre_m: np.ndarray, length_m: float) -> np.ndarray:
 def _problem_route(file: CommonRoadFile, problem_id: int) -> tuple[np.ndarray, list[int], Any]:
     """The route planner's shortest reference path of a planning problem."""
     try:
-        from commonroad_route_planner.reference_path_planner import ReferencePathPlanner
-        from commonroad_route_planner.route_planner import RoutePlanner
+        with warnings.catch_warnings():  # SciPy's deprecation of scipy.spatial.kdtree
+            warnings.simplefilter("ignore")
+            from commonroad_route_planner.reference_path_planner import ReferencePathPlanner
+            from commonroad_route_planner.route_planner import RoutePlanner
     except ImportError:
         raise ValueError(f"planning problems need commonroad-route-planner: {INSTALL_HINT}") \
             from None
@@ -191,7 +209,8 @@ def _lanelet_route(file: CommonRoadFile, chain: list[int], length_m: float
 
 
 def plan_route(file: CommonRoadFile, *, problem_id: int | None = None,
-               lanelet_ids: list[int] | None = None, length_m: float | None = None) -> Route:
+               lanelet_ids: list[int] | None = None, length_m: float | None = None,
+               smoothing: str = DEFAULT_SMOOTHING) -> Route:
     """The route of a planning problem or of a start lanelet, in its smoothed frame.
 
     Parameters
@@ -205,6 +224,8 @@ def plan_route(file: CommonRoadFile, *, problem_id: int | None = None,
         branches, merged up to ``length_m``.
     length_m
         The route's length [m] (required with ``lanelet_ids``; cuts a planning problem's route).
+    smoothing
+        One of :data:`SMOOTHINGS`.
 
     Raises
     ------
@@ -212,6 +233,8 @@ def plan_route(file: CommonRoadFile, *, problem_id: int | None = None,
         Unknown IDs (the message lists the valid ones), neither or both of a planning problem and
         a lanelet, an ambiguous branch, or a route the planner cannot find.
     """
+    if smoothing not in SMOOTHINGS:
+        raise ValueError(f"--smoothing must be one of {sorted(SMOOTHINGS)}, got {smoothing!r}")
     if (problem_id is None) == (lanelet_ids is None):
         raise ValueError("give either --planning-problem or --lanelet (with --length-m)")
     network = file.scenario.lanelet_network
@@ -238,11 +261,11 @@ def plan_route(file: CommonRoadFile, *, problem_id: int | None = None,
         centre, ids = _lanelet_route(file, list(lanelet_ids), length_m)
         label = f"lanelet {ids[0]} onward, {length_m:g} m"
     try:
-        frame = _smoothed_frame(centre)
+        frame = _smoothed_frame(centre, smoothing)
     except ValueError:
         raise
     except Exception as err:  # clcs raises on paths it cannot frame (heading jumps ≥ π/2)
         raise ValueError(f"{label}: its centre line has no curvilinear frame ({err})") from None
     step = 0 if problem is None else int(problem.initial_state.time_step)
-    return Route(label, tuple(int(i) for i in ids), frame,
+    return Route(label, tuple(int(i) for i in ids), smoothing, frame,
                  None if problem is None else problem.initial_state, step)
