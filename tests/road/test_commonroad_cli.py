@@ -108,3 +108,28 @@ def test_import_writes_the_road_and_reports_what_it_measured(tmp_path: Path) -> 
                            "problem 1")
     # No underground label in the file: the camera's dry class value.
     assert "mu = 0.8" in text and "no underground label" in text
+
+
+@needs_extra
+@pytest.mark.parametrize(("label", "mu"), [("wet", 0.5), ("ice", 0.25), ("dirty", 0.8)])
+def test_underground_label_sets_the_camera_class_value(label: str, mu: float,
+                                                       tmp_path: Path) -> None:
+    """A 2020a file's ``location/environment/underground`` gives μ (paper Table I's class value);
+    ``--mu`` overrides it."""
+    from mufusion.estimators.classes import PAPER_CLASSES
+
+    assert mu in {c.value for c in PAPER_CLASSES}
+    environment = ("<environment><time>08:30</time><timeOfDay>morning</timeOfDay>"
+                   f"<weather>heavy_rain</weather><underground>{label}</underground>"
+                   "</environment>\n  </location>")
+    source = tmp_path / "labelled.xml"
+    source.write_text(Path(GUETERSLOH).read_text().replace("</location>", environment, 1))
+    out = tmp_path / "road.toml"
+    result = _run(str(source), "--planning-problem", "1", "--vehicle", "car", "--speed-mps", "8",
+                  "--out", str(out))
+    assert result.exit_code == 0, result.output
+    text = out.read_text()
+    assert f"\nmu = {mu}\n" in text and f"underground '{label}'" in text
+    result = _run(str(source), "--planning-problem", "1", "--vehicle", "car", "--speed-mps", "8",
+                  "--mu", "0.3", "--out", str(out))
+    assert result.exit_code == 0 and "\nmu = 0.3\n" in out.read_text()
