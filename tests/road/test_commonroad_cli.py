@@ -29,6 +29,15 @@ def _said(result) -> str:
     return " ".join(result.output.split())
 
 
+def _assert_refused(args: list[str], fragment: str, tmp_path: Path) -> None:
+    """Exit 2, the problem named, nothing written."""
+    out = tmp_path / "road.toml"
+    result = _run(*args, "--out", str(out))
+    assert result.exit_code == 2, result.output
+    assert fragment in _said(result)
+    assert not out.exists()
+
+
 @pytest.mark.parametrize(
     ("args", "fragment"),
     [
@@ -46,11 +55,7 @@ def _said(result) -> str:
     ],
 )
 def test_bad_options_exit_2_before_reading(args, fragment: str, tmp_path: Path) -> None:
-    out = tmp_path / "road.toml"
-    result = _run(*args, "--out", str(out))
-    assert result.exit_code == 2, result.output
-    assert fragment in _said(result)
-    assert not out.exists()
+    _assert_refused(args, fragment, tmp_path)
 
 
 def test_missing_and_foreign_files_exit_2(tmp_path: Path) -> None:
@@ -87,11 +92,7 @@ def test_missing_and_foreign_files_exit_2(tmp_path: Path) -> None:
     ],
 )
 def test_unusable_routes_exit_2_naming_the_problem(args, fragment: str, tmp_path: Path) -> None:
-    out = tmp_path / "road.toml"
-    result = _run(*args, "--out", str(out))
-    assert result.exit_code == 2, result.output
-    assert fragment in _said(result)
-    assert not out.exists()
+    _assert_refused(args, fragment, tmp_path)
 
 
 @needs_extra
