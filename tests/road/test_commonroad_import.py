@@ -161,9 +161,12 @@ def test_imported_toml_loads_as_road_scenario(problem_route: ImportedRoad,
                                               tmp_path: Path) -> None:
     """Fails until the `road` scenario kind (branch roads-kind) is merged."""
     from mufusion.scenarios import load_scenario
+    from mufusion.vehicle.params import vehicle_preset
 
     cfg = load_scenario(str(_written(problem_route, tmp_path)))
     assert cfg.name == "road"
     assert cfg.start_s_m == pytest.approx(10.0)
-    road = cfg.build_road()
+    road = cfg.build_road(vehicle_preset(cfg.vehicle))
     assert road.path.length_m == pytest.approx(problem_route.length_m, rel=0.02)
+    assert road.lane_width_m == pytest.approx(problem_route.lanes.ego_width_m, abs=1e-3)
+    assert len(road.obstacles) == len(problem_route.obstacles)
