@@ -262,7 +262,7 @@ def plan_route(file: CommonRoadFile, *, problem_id: int | None = None,
         label = f"lanelet {ids[0]} onward, {length_m:g} m"
     try:
         frame = _smoothed_frame(centre, smoothing)
-    except ValueError:
+    except ValueError:  # the extra missing: its own message
         raise
     except Exception as err:  # clcs raises on paths it cannot frame (heading jumps ≥ π/2)
         raise ValueError(f"{label}: its centre line has no curvilinear frame ({err})") from None
