@@ -297,7 +297,9 @@ def _blas_controller() -> ThreadpoolController:
 
 
 def _planner_obstacle(o: Obstacle) -> PlannerObstacle:
-    return PlannerObstacle(s_m=o.s_m, d_m=o.d_m, length_m=o.length_m, width_m=o.width_m)
+    # ``o`` is placed at the planning step's time (World.planner_obstacles).
+    return PlannerObstacle(s_m=o.s_m, d_m=o.d_m, length_m=o.length_m, width_m=o.width_m,
+                           speed_mps=o.speed_mps)
 
 
 def run_meta(
