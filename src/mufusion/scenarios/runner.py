@@ -319,7 +319,8 @@ def run_meta(
             ObstacleTrace(
                 s_m=o.s_m, d_m=o.d_m, length_m=o.length_m, width_m=o.width_m,
                 appear_time_s=o.appear_at_time_s, corners_x_m=corners[:, 0].tolist(),
-                corners_y_m=corners[:, 1].tolist(),
+                corners_y_m=corners[:, 1].tolist(), speed_mps=o.speed_mps,
+                appear_ego_s_m=o.appear_at_ego_s_m,
             )
         )
     rates = cfg.rates()
