@@ -77,3 +77,18 @@ def test_the_worst_obstacle_at_each_tick_and_the_summary_in_the_run_metrics() ->
     metrics = compute_metrics(_log(far, near))
     assert metrics.min_time_to_collision_s == pytest.approx(expected.min())
     assert metrics.to_dict()["min_time_to_collision_s"] == pytest.approx(expected.min(), abs=1e-6)
+
+
+def test_the_front_edge_decides_whether_the_obstacle_is_in_the_path() -> None:
+    # The centre 1.5 m left of the obstacle's: in the path (1.5 < (2.6 + 2) / 2) heading along
+    # the road; turned 0.3 rad away, the nose is at 1.5 + 2.64 sin 0.3 = 2.28 m, beyond
+    # (2.6 cos 0.3 + 2) / 2 = 2.24 m: clear of it.
+    def ttc(dpsi: float) -> float | None:
+        t = np.arange(N) * 0.02
+        log = RunLog(run_meta(obstacles=[_obstacle(100.0)]))
+        log.extend(ticks(N, s_m=SPEED * t, d_m=1.5, dpsi_rad=dpsi, vx_mps=SPEED,
+                         speed_mps=SPEED, mu_front=MU, mu_rear=MU))
+        return criticality_summary(log)["min_time_to_collision_s"]
+
+    assert ttc(0.0) is not None
+    assert ttc(0.3) is None

@@ -60,6 +60,7 @@ def test_an_oncoming_vehicle_in_the_opposing_lane_passes_without_evasion() -> No
     beside = ts[ts["passed_obstacle"].astype(bool)].iloc[0]
     assert beside["clearance_m"] < LANE_M - 0.5 * (1.8 + log.meta.vehicle.width_m) + 0.3
     assert log.meta.obstacles[0].speed_mps == -15.0
+    assert metrics.min_time_to_collision_s is None  # never in the truck's path
 
 
 def test_a_slower_lead_in_the_own_lane_is_followed_not_hit() -> None:
@@ -75,3 +76,7 @@ def test_a_slower_lead_in_the_own_lane_is_followed_not_hit() -> None:
     assert not ts["passed_obstacle"].astype(bool).any()
     assert abs(float(ts["speed_mps"].iloc[-1]) - 10.0) < 1.0
     assert not metrics.left_lane
+    # Never critical: braking was never too late, never beyond the friction the road offers.
+    assert metrics.min_time_to_brake_s is not None and metrics.min_time_to_brake_s > 0.0
+    assert metrics.max_required_decel_over_mu_g is not None
+    assert metrics.max_required_decel_over_mu_g < 0.5

@@ -7,9 +7,12 @@ summary takes the worst tick (:func:`criticality_summary`). Definitions and form
 docs/metrics.md, "Criticality measures". The functions of arrays are pure; :func:`criticality`
 reads a run's log only.
 
-A tick counts for an obstacle when the obstacle is present, lies ahead of the vehicle's front
-(its near face ahead of it, or overlapping it along s) and overlaps the vehicle's path sideways
-(``|d − d_o| < (w + w_o)/2``, the bodies' half widths: geometry, no margin).
+A tick counts for an obstacle when the obstacle is present, its far end lies ahead of the
+vehicle's front and the front edge overlaps it sideways: the front edge's centre at
+``(s_f, d_f) = (s + a cos Δψ, d + a sin Δψ)`` (``a`` from the CoG to the footprint's front),
+``|d_f − d_o| < (w |cos Δψ| + w_o) / 2`` (the widths: geometry, no margin). At the start of an
+evasion the nose swings clear of the obstacle before the centre does; judged by the centre,
+the obstacle would still be in the path, nose beside it.
 """
 
 from __future__ import annotations
@@ -174,6 +177,8 @@ def criticality(log: RunLog) -> Criticality | None:
     v_ego = ((ts["vx_mps"].to_numpy(float) * np.cos(dpsi) - ts["vy_mps"].to_numpy(float)
               * np.sin(dpsi)) / (1.0 - kappa * d))
     front_m, width_m = _ego_geometry(meta)
+    s_front, d_front = s + front_m * np.cos(dpsi), d + front_m * np.sin(dpsi)
+    half_width = 0.5 * width_m * np.abs(np.cos(dpsi))
     mu_true = np.minimum(ts["mu_front"].to_numpy(float), ts["mu_rear"].to_numpy(float))
     decel = meta.planner.utilization_factor * mu_true * GRAVITY_MPS2
     ttc = np.full(t.shape, np.inf)
@@ -181,10 +186,10 @@ def criticality(log: RunLog) -> Criticality | None:
     need = np.zeros(t.shape)
     for ob in meta.obstacles:
         s_o = ob.s_at_time(t)
-        gap = np.asarray(s_o - 0.5 * ob.length_m - (s + front_m), float)
-        ahead = s_o + 0.5 * ob.length_m > s + front_m  # its far end ahead of the front
+        gap = np.asarray(s_o - 0.5 * ob.length_m - s_front, float)
+        ahead = s_o + 0.5 * ob.length_m > s_front  # its far end ahead of the front
         relevant = (_present(ob, t, s) & ahead
-                    & (np.abs(d - ob.d_m) < 0.5 * (width_m + ob.width_m)))
+                    & (np.abs(d_front - ob.d_m) < half_width + 0.5 * ob.width_m))
         gap = np.where(relevant, gap, np.nan)
         rel = v_ego - ob.speed_mps
         ttc = np.minimum(ttc, time_to_collision_s(gap, rel))
