@@ -18,6 +18,7 @@ the obstacle would still be in the path, nose beside it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -201,7 +202,7 @@ def criticality(log: RunLog) -> Criticality | None:
     return Criticality(t, ttc, ttb, need, over_mu, over_mu_hat)
 
 
-def criticality_summary(log: RunLog) -> dict[str, float | None]:
+def criticality_summary(log: RunLog) -> dict[str, Any]:
     """The run's worst criticality for ``summary.json``: the smallest TTC and TTB [s], the
     largest required deceleration [m/s²] and its largest ratios to ``μ g`` and ``μ̂ g``.
 
