@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from mufusion.road import Obstacle, obstacle_active
 from mufusion.sim.log import RunLog
 from mufusion.sim.records import ObstacleTrace, RunMeta
 from mufusion.vehicle.params import GRAVITY_MPS2
@@ -131,14 +132,10 @@ class Criticality:
 
 def _present(obstacle: ObstacleTrace, t_s: np.ndarray, s_m: np.ndarray) -> np.ndarray:
     """Whether the obstacle is there at each tick (its triggers, as the world applies them)."""
-    if obstacle.appear_time_s is None and obstacle.appear_ego_s_m is None:
-        return np.ones(t_s.shape, dtype=bool)
-    present = np.zeros(t_s.shape, dtype=bool)
-    if obstacle.appear_time_s is not None:
-        present |= t_s >= obstacle.appear_time_s
-    if obstacle.appear_ego_s_m is not None:
-        present |= s_m >= obstacle.appear_ego_s_m
-    return present
+    return obstacle_active(Obstacle(
+        obstacle.s_m, obstacle.d_m, obstacle.length_m, obstacle.width_m,
+        appear_at_ego_s_m=obstacle.appear_ego_s_m, appear_at_time_s=obstacle.appear_time_s,
+    ), s_m, t_s)
 
 
 def _mu_hat_under_vehicle(log: RunLog, t_s: np.ndarray) -> FloatArray:
