@@ -20,7 +20,7 @@ from matplotlib.patches import Polygon
 
 from mufusion.configurations import Configuration
 from mufusion.sim.log import RunLog
-from mufusion.sim.records import RunMeta
+from mufusion.sim.records import ObstacleTrace, RunMeta
 
 # One colour per configuration, the same in every figure.
 CONFIG_COLORS: dict[str, str] = {
@@ -182,13 +182,30 @@ def draw_road(ax: Axes, meta: RunMeta, centre_xy: tuple[float, float], radius_m:
     return surface
 
 
+def obstacle_corners_xy(meta: RunMeta, obstacle: ObstacleTrace, time_s: float) -> np.ndarray:
+    """Cartesian corners (4, 2) [m] of ``obstacle`` where it is at ``time_s`` [s].
+
+    A static obstacle's are the logged ones; a moving one is placed on the logged road samples
+    (interpolated) at :meth:`~mufusion.sim.records.ObstacleTrace.s_at_time`, aligned with the
+    road there.
+    """
+    if obstacle.speed_mps == 0.0:
+        return np.column_stack([obstacle.corners_x_m, obstacle.corners_y_m])
+    s, x, y, psi = _road_arrays(meta)
+    s_now = float(obstacle.s_at_time(time_s))
+    psi_now = float(np.interp(s_now, s, np.unwrap(psi)))
+    cx = float(np.interp(s_now, s, x)) - obstacle.d_m * np.sin(psi_now)
+    cy = float(np.interp(s_now, s, y)) + obstacle.d_m * np.cos(psi_now)
+    return footprint_xy(cx, cy, psi_now, obstacle.length_m, obstacle.width_m)
+
+
 def draw_obstacles(ax: Axes, meta: RunMeta, time_s: float) -> int:
-    """Draw the obstacles active at ``time_s``; returns how many were drawn."""
+    """Draw the obstacles active at ``time_s``, where they are then; returns how many."""
     drawn = 0
     for obstacle in meta.obstacles:
         if obstacle.appear_time_s is not None and time_s + 1e-9 < obstacle.appear_time_s:
             continue
-        corners = np.column_stack([obstacle.corners_x_m, obstacle.corners_y_m])
+        corners = obstacle_corners_xy(meta, obstacle, time_s)
         ax.add_patch(
             Polygon(corners, closed=True, facecolor="tab:red", edgecolor="darkred", lw=1.0,
                     zorder=3, gid="obstacle")

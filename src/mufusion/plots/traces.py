@@ -46,12 +46,18 @@ def build_traces_figure(logs: Sequence[RunLog]) -> Figure:
 
     obstacles = meta.obstacles
     s0 = start_s(logs[0])
+    t_end = max(float(log.timeseries["t_s"].iloc[-1]) for log in logs)
     for j, obstacle in enumerate(obstacles):
         length, width = obstacle.length_m, obstacle.width_m
         s_rel = obstacle.s_m - s0
+        # A moving obstacle sweeps its stretch of road over the run: drawn hatched, from where
+        # it starts to where it is at the run's end (its start marked as the position).
+        s_end = float(obstacle.s_at_time(t_end)) - s0
+        low, high = min(s_rel, s_end) - length / 2, max(s_rel, s_end) + length / 2
         ax_d.add_patch(
-            Rectangle((s_rel - length / 2, obstacle.d_m - width / 2), length, width,
+            Rectangle((low, obstacle.d_m - width / 2), high - low, width,
                       facecolor="tab:red", alpha=0.35, edgecolor="darkred",
+                      hatch="//" if obstacle.speed_mps else None,
                       label="obstacle (s-d footprint)" if j == 0 else None)
         )
         ax_v.axvline(s_rel, color="tab:red", lw=1.0, ls="--",

@@ -297,7 +297,9 @@ def _blas_controller() -> ThreadpoolController:
 
 
 def _planner_obstacle(o: Obstacle) -> PlannerObstacle:
-    return PlannerObstacle(s_m=o.s_m, d_m=o.d_m, length_m=o.length_m, width_m=o.width_m)
+    # ``o`` is placed at the planning step's time (World.planner_obstacles).
+    return PlannerObstacle(s_m=o.s_m, d_m=o.d_m, length_m=o.length_m, width_m=o.width_m,
+                           speed_mps=o.speed_mps)
 
 
 def run_meta(
@@ -317,7 +319,8 @@ def run_meta(
             ObstacleTrace(
                 s_m=o.s_m, d_m=o.d_m, length_m=o.length_m, width_m=o.width_m,
                 appear_time_s=o.appear_at_time_s, corners_x_m=corners[:, 0].tolist(),
-                corners_y_m=corners[:, 1].tolist(),
+                corners_y_m=corners[:, 1].tolist(), speed_mps=o.speed_mps,
+                appear_ego_s_m=o.appear_at_ego_s_m,
             )
         )
     rates = cfg.rates()
