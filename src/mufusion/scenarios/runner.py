@@ -343,6 +343,7 @@ def run_meta(
             curvature_1pm=np.round(road.curvature(s), 8).tolist(),
             mu=np.asarray(road.mu_at(s), float).tolist(),
             lane_width_m=road.lane_width_m,
+            opposing_lane_width_m=road.opposing_lane_width_m,
         ),
         obstacles=obstacles,
         planner=PlannerSettings(
