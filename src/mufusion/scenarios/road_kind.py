@@ -18,7 +18,6 @@ from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
-from scipy.spatial import cKDTree
 
 from mufusion.road import ReferencePath, Road
 from mufusion.scenarios.base import Scenario
@@ -73,6 +72,8 @@ def crossing_m(path: ReferencePath, step_m: float = CROSSING_STEP_M) -> tuple[fl
     path than 4 steps are left out (a curve tighter than ``2 step / π`` would fold onto itself
     there; :func:`min_radius_m` forbids far wider ones).
     """
+    from scipy.spatial import cKDTree  # only a road file's check needs it (not at import)
+
     s = np.linspace(0.0, path.length_m, max(2, math.ceil(path.length_m / step_m) + 1))
     x, y = path.position(s)
     pairs = cKDTree(np.column_stack([x, y])).query_pairs(step_m, output_type="ndarray")
