@@ -181,10 +181,11 @@ def draw_road(ax: Axes, meta: RunMeta, centre_xy: tuple[float, float], radius_m:
         linewidths=0.3, zorder=0,
     )
     ax.add_collection(surface)
-    centre = _offset(meta, w / 2, keep)
     ax.plot(right[:, 0], right[:, 1], color="0.25", lw=1.2, zorder=1)
     ax.plot(left[:, 0], left[:, 1], color="0.25", lw=1.2, zorder=1)
-    ax.plot(centre[:, 0], centre[:, 1], color="gold", lw=1.3, ls=(0, (4, 4)), zorder=1)
+    if opposing_width(meta) > 0.0:  # a one-way road has no centre marking
+        centre = _offset(meta, w / 2, keep)
+        ax.plot(centre[:, 0], centre[:, 1], color="gold", lw=1.3, ls=(0, (4, 4)), zorder=1)
     return surface
 
 
