@@ -8,7 +8,7 @@ no curve may be tighter than the vehicle can steer or than the road's inner edge
 (:func:`min_radius_m`), the lane must hold the vehicle and the planner's footprint margin,
 obstacles must lie on the road and on the path, friction zones on the path, and the path must
 reach beyond where the vehicle can get in ``duration_s`` (:func:`required_length_m`). Schema:
-``docs/scenarios.md`` ("The road kind").
+docs/scenarios.md, "The road kind".
 """
 
 from __future__ import annotations

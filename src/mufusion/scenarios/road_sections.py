@@ -2,7 +2,7 @@
 ``[[obstacles]]``): one validated (pydantic) model each, with the checks a section can make on
 its own (ranges, zero lengths, overlapping friction zones). The checks that need the whole
 scenario (the path against the vehicle, obstacles against the lanes) are
-:mod:`mufusion.scenarios.road_kind`. Schema: ``docs/scenarios.md`` ("The road kind").
+:mod:`mufusion.scenarios.road_kind`. Schema: docs/scenarios.md, "The road kind".
 """
 
 from __future__ import annotations

@@ -17,7 +17,7 @@ behind the start; by time: after cruising at the entry speed), at the entry spee
 lowest ego-lane μ between the front and the obstacle. The envelopes assume a straight road;
 moving obstacles and those outside the own lane are not judged. The variant's class is the
 worst of the path's and the obstacles', its margin that verdict's. Derivation and limits:
-``docs/feasibility.md`` ("Any road").
+docs/feasibility.md, "Any road".
 """
 
 from __future__ import annotations
