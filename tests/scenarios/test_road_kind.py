@@ -157,7 +157,7 @@ def test_the_smallest_radius_is_the_steering_or_the_inner_edge() -> None:
     assert min_radius_m(TRUCK, 6.0) == 7.0 > steering
     # A left curve's inside is the opposing lane: 1.75 + 3 + 1 m.
     tight = _with(path__segments__1={"kind": "arc", "radius_m": 5.5, "angle_rad": 1.0})
-    with pytest.raises(ValueError, match="below the smallest allowed 5.75 m"):
+    with pytest.raises(ValueError, match=r"below the smallest allowed 5\.75 m"):
         scenario_from_dict(tight)
     right = _with(path__segments__1={"kind": "arc", "radius_m": 5.5, "angle_rad": -1.0},
                   obstacles=[])

@@ -2,9 +2,10 @@
 
 The reference path is the ego lane centre; the ego lane is ``|d| ≤ w/2``; the opposing lane lies
 to its left, ``w/2 < d ≤ w/2 + w_o`` (``w_o``: its width, ``w`` unless given; 0 on a one-way
-road); the road is both lanes, ``−w/2 ≤ d ≤ w/2 + w_o`` (``3w/2`` with equal lanes). A footprint is a
-``length × width`` rectangle centred at the given Frenet pose; its corners are placed exactly in
-the Cartesian plane and projected back onto the path, so the checks stay exact in curves.
+road); the road is both lanes, ``−w/2 ≤ d ≤ w/2 + w_o`` (``3w/2`` with equal lanes). A footprint
+is a ``length × width`` rectangle centred at the given Frenet pose; its corners are placed
+exactly in the Cartesian plane and projected back onto the path, so the checks stay exact in
+curves.
 
 The graded quantities (:func:`lane_margin_m`, :func:`opposing_lane_depth_m`,
 :func:`road_margin_m`) are pure functions of the corners' offsets ``d``; the boolean checks are

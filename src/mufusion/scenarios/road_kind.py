@@ -124,7 +124,8 @@ class RoadScenario(Scenario):
         if self.lanes.ego_width_m < need:
             raise ValueError(
                 f"lanes.ego_width_m must be at least the {params.name}'s width plus the "
-                f"planner's footprint margin each side = {need:.2f} m, got {self.lanes.ego_width_m}")
+                f"planner's footprint margin each side = {need:.2f} m, "
+                f"got {self.lanes.ego_width_m}")
 
     def _check_curves(self, path: ReferencePath, params: VehicleParams) -> None:
         where = "path.segments" if self.path.segments is not None else "path.points_m"

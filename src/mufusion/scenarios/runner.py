@@ -46,8 +46,8 @@ from mufusion.scenarios.config import (
     perturbed,
     planner_lane_bounds_m,
 )
-from mufusion.scenarios.road_kind import RoadScenario
 from mufusion.scenarios.feasibility import classify_scenario
+from mufusion.scenarios.road_kind import RoadScenario
 from mufusion.sim.components import Controller, Planner
 from mufusion.sim.log import RunLog
 from mufusion.sim.loop import ClosedLoop

@@ -23,7 +23,6 @@ docs/feasibility.md, "Any road".
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 from mufusion.road import FrictionMap, Obstacle, ReferencePath
@@ -31,6 +30,7 @@ from mufusion.scenarios.feasibility.common import FeasibilityClass
 from mufusion.scenarios.feasibility.popup import PopupFeasibility
 from mufusion.scenarios.feasibility.profile import FrictionOfS, Piece
 from mufusion.scenarios.feasibility.turn import TurnLimit, line_limit
+
 
 @dataclass(frozen=True)
 class RoadFeasibility:
@@ -155,9 +155,7 @@ def road_feasibility(
     parts: list[tuple[str, FeasibilityClass, float]] = [
         ("path", path.feasibility_class, path.margin_mps)]
     parts += [(f"obstacles.{i}", v.feasibility_class, v.margin_mps) for i, v in obstacles]
-    key: Callable[[tuple[str, FeasibilityClass, float]], tuple[int, float]] = (
-        lambda part: (part[1].rank, part[2]))
-    name, verdict, margin = min(parts, key=key)
+    name, verdict, margin = min(parts, key=lambda part: (part[1].rank, part[2]))
     return RoadFeasibility(feasibility_class=verdict, margin_mps=margin,
                            entry_speed_mps=entry_speed_mps, path=path, obstacles=obstacles,
                            deciding=name)
