@@ -62,16 +62,18 @@ def test_a_friction_zone_on_the_arc_lowers_the_limit_and_the_margin() -> None:
     assert wet.margin_mps < dry.margin_mps
 
 
+# A 10 m radius 20 m after the start at 25 m/s: no braking makes it.
+TOO_FAST = {
+    "name": "road", "vehicle": "car", "initial_speed_mps": 25.0, "duration_s": 3.0,
+    "start_s_m": 20.0,
+    "path": {"segments": [{"kind": "straight", "length_m": 40.0},
+                          {"kind": "arc", "radius_m": 10.0, "angle_rad": -1.5},
+                          {"kind": "straight", "length_m": 100.0}]},
+}
+
+
 def test_too_fast_into_a_close_curve_is_infeasible() -> None:
-    # A 10 m radius 20 m after the start at 25 m/s: no braking makes it.
-    verdict = scenario_from_dict({
-        "name": "road", "vehicle": "car", "initial_speed_mps": 25.0, "duration_s": 3.0,
-        "start_s_m": 20.0,
-        "path": {"segments": [{"kind": "straight", "length_m": 40.0},
-                              {"kind": "arc", "radius_m": 10.0, "angle_rad": -1.5},
-                              {"kind": "straight", "length_m": 100.0}]},
-    })
-    result = classify_scenario(verdict, CAR)
+    result = classify_scenario(scenario_from_dict(TOO_FAST), CAR)
     assert result.feasibility_class is FeasibilityClass.INFEASIBLE and result.margin_mps < 0.0
 
 
@@ -101,13 +103,7 @@ def test_a_static_obstacle_in_the_lane_is_judged_as_a_pop_up() -> None:
 def test_the_verdict_lands_in_the_run_metadata() -> None:
     from mufusion.scenarios.runner import planner_config, run_meta
 
-    cfg = scenario_from_dict({
-        "name": "road", "vehicle": "car", "initial_speed_mps": 25.0, "duration_s": 3.0,
-        "start_s_m": 20.0,
-        "path": {"segments": [{"kind": "straight", "length_m": 40.0},
-                              {"kind": "arc", "radius_m": 10.0, "angle_rad": -1.5},
-                              {"kind": "straight", "length_m": 100.0}]},
-    })
+    cfg = scenario_from_dict(TOO_FAST)
     meta = run_meta(cfg, "GT", CAR, cfg.build_road(CAR), planner_config(cfg, CAR))
     verdict = summary_fields(classify_scenario(cfg, CAR))
     assert meta.feasibility == verdict["feasibility"] == "infeasible"
