@@ -137,6 +137,12 @@ def lane_width(meta: RunMeta) -> float:
     return meta.road.lane_width_m
 
 
+def opposing_width(meta: RunMeta) -> float:
+    """Width [m] of the run's opposing lane (the ego lane's unless the road says otherwise)."""
+    opposing = meta.road.opposing_lane_width_m
+    return meta.road.lane_width_m if opposing is None else opposing
+
+
 def friction_at(meta: RunMeta, s_m: np.ndarray) -> np.ndarray:
     """True μ at progress ``s_m``: piecewise constant, each sample holding until the next."""
     s_ref = np.asarray(meta.road.s_m, dtype=float)
@@ -164,7 +170,7 @@ def draw_road(ax: Axes, meta: RunMeta, centre_xy: tuple[float, float], radius_m:
     if keep.sum() < 2:
         return None
     right = _offset(meta, -w / 2, keep)
-    left = _offset(meta, 3 * w / 2, keep)
+    left = _offset(meta, w / 2 + opposing_width(meta), keep)
     quads = [
         np.array([right[i], right[i + 1], left[i + 1], left[i]]) for i in range(len(right) - 1)
     ]
@@ -175,10 +181,11 @@ def draw_road(ax: Axes, meta: RunMeta, centre_xy: tuple[float, float], radius_m:
         linewidths=0.3, zorder=0,
     )
     ax.add_collection(surface)
-    centre = _offset(meta, w / 2, keep)
     ax.plot(right[:, 0], right[:, 1], color="0.25", lw=1.2, zorder=1)
     ax.plot(left[:, 0], left[:, 1], color="0.25", lw=1.2, zorder=1)
-    ax.plot(centre[:, 0], centre[:, 1], color="gold", lw=1.3, ls=(0, (4, 4)), zorder=1)
+    if opposing_width(meta) > 0.0:  # a one-way road has no centre marking
+        centre = _offset(meta, w / 2, keep)
+        ax.plot(centre[:, 0], centre[:, 1], color="gold", lw=1.3, ls=(0, (4, 4)), zorder=1)
     return surface
 
 

@@ -12,6 +12,7 @@ from mufusion.plots._common import (
     config_color,
     config_name,
     lane_width,
+    opposing_width,
     require_logs,
     save_figure,
     start_s,
@@ -33,13 +34,14 @@ def build_traces_figure(logs: Sequence[RunLog]) -> Figure:
 
     meta = logs[0].meta
     w = lane_width(meta)
+    edge = w / 2 + opposing_width(meta)
     ax_d.axhline(-w / 2, color="0.3", lw=1.0, ls="-")
     ax_d.axhline(w / 2, color="0.3", lw=1.0, ls="--")
-    ax_d.axhline(3 * w / 2, color="0.3", lw=1.0, ls="-")
+    ax_d.axhline(edge, color="0.3", lw=1.0, ls="-")
     ax_d.axhline(0.0, color="0.7", lw=0.8, ls=":")
     # Label the boundaries at the right edge, inside the axes, so they never collide with data.
     for level, text in ((-w / 2, "ego lane edge"), (w / 2, "ego / opposing lane boundary"),
-                        (3 * w / 2, "road edge")):
+                        (edge, "road edge")):
         ax_d.annotate(text, xy=(1.0, level), xycoords=("axes fraction", "data"),
                       xytext=(-3, 2), textcoords="offset points", ha="right", va="bottom",
                       fontsize=7, color="0.3")

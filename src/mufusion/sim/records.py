@@ -247,6 +247,8 @@ class RoadTrace(_Meta):
     curvature_1pm: list[float]
     mu: list[float]
     lane_width_m: float
+    opposing_lane_width_m: float | None = None
+    """The opposing lane's width [m]; None: ``lane_width_m`` (0: a one-way road)."""
 
 
 class ObstacleTrace(_Meta):

@@ -247,7 +247,7 @@ class World:
                 s_c = self._trackers.centre.to_frenet(cx, cy, psi)[0]
             passed |= s_c - 0.5 * length > obstacle.s_at_time(t_s) + 0.5 * obstacle.length_m
         mu_f, mu_r = self._mu_under_axles(pose, params)
-        lanes = footprint_lane_margins(corner_d, lane_width)
+        lanes = footprint_lane_margins(corner_d, lane_width, self.road.opposing_lane_width_m)
         return FootprintStatus(
             mu_front=mu_f,
             mu_rear=mu_r,
