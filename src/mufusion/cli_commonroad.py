@@ -8,9 +8,9 @@ only when a file is read.
 
 from __future__ import annotations
 
-import math
+import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -63,19 +63,19 @@ def import_commonroad(
                                    "file's underground label, else dry).")] = None,
 ) -> None:
     """Import a CommonRoad scenario's route, lanes and obstacles as a `road` scenario TOML."""
-    from mufusion.estimators.classes import PAPER_CLASSES
-    from mufusion.road.commonroad import SMOOTHINGS
-    from mufusion.scenarios.sections import PlannerSettings
+    from mufusion.road.commonroad import SMOOTHINGS, RunLimits
+    from mufusion.scenarios.base import Scenario
+    from mufusion.scenarios.road_kind import START_ROOM_M
+    from mufusion.scenarios.sections import Friction, PlannerSettings
     from mufusion.vehicle.params import PRESETS
 
-    surfaces = {c.name: c for c in PAPER_CLASSES}
     try:
         if vehicle not in PRESETS:
             raise ValueError(f"--vehicle must be one of {sorted(PRESETS)}, got {vehicle!r}")
-        if speed_mps is not None and not 0.0 < speed_mps <= 40.0:
-            raise ValueError(f"--speed-mps must be in (0, 40] m/s, got {speed_mps}")
-        if mu is not None and not 0.1 <= mu <= 1.5:
-            raise ValueError(f"--mu must be in [0.1, 1.5], got {mu}")
+        if speed_mps is not None:
+            _check_like("--speed-mps", speed_mps, _field_type(Scenario, "initial_speed_mps"))
+        if mu is not None:
+            _check_like("--mu", mu, Friction)
         if smoothing not in SMOOTHINGS:
             raise ValueError(f"--smoothing must be one of {sorted(SMOOTHINGS)}, got "
                              f"{smoothing!r}")
@@ -90,42 +90,81 @@ def import_commonroad(
             raise ValueError(f"--out {str(out)!r} is a directory, not a file")
         params = PRESETS[vehicle]
         planner = PlannerSettings()
-        preview_s = planner.horizon_steps * planner.dt_s
-        from mufusion.road.commonroad import (
-            UNDERGROUND_SURFACE,
-            choose_run,
-            clear_of_start,
-            import_road,
-            read_commonroad,
-            road_scenario_toml,
-        )
+        limits = RunLimits(start_room_m=START_ROOM_M,
+                           preview_s=planner.horizon_steps * planner.dt_s,
+                           vehicle_length_m=params.length_m, min_run_s=MIN_RUN_S,
+                           max_duration_s=_field_max(Scenario, "duration_s"))
         speed_guess = speed_mps or (DEFAULT_SPEED_MPS if chain is not None else None)
-        if length_m is not None and speed_guess is not None:
-            from mufusion.road.commonroad import min_route_length_m
-
-            need = min_route_length_m(speed_guess, preview_s, params.length_m, MIN_RUN_S)
-            if length_m < need:
-                raise ValueError(f"--length-m {length_m:g} is shorter than a run needs: at least "
-                                 f"{need:.0f} m at {speed_guess:g} m/s")
-        source = read_commonroad(file)
-        road = import_road(source, problem_id=planning_problem, lanelet_ids=chain,
-                           length_m=length_m, smoothing=smoothing)
-        max_kappa = math.tan(params.max_steer_rad) / params.wheelbase_m
-        if road.smallest_radius_m < 1.0 / max_kappa:
-            raise ValueError(f"{road.route_label}: the path's smallest radius "
-                             f"{road.smallest_radius_m:.1f} m is sharper than the {vehicle} can "
-                             f"steer ({1.0 / max_kappa:.1f} m)")
-        if road.lanes.ego_width_m <= params.width_m:
-            raise ValueError(f"{road.route_label}: the own lane ({road.lanes.ego_width_m:.2f} m "
-                             f"measured) is not wider than the {vehicle} ({params.width_m} m)")
-        speed = speed_mps or road.start_speed_mps or DEFAULT_SPEED_MPS
-        run = choose_run(road, speed_mps=min(40.0, speed), preview_s=preview_s,
-                         vehicle_length_m=params.length_m, min_run_s=MIN_RUN_S,
-                         max_duration_s=120.0)
-        road = clear_of_start(road, run, vehicle_length_m=params.length_m,
-                              vehicle_width_m=params.width_m)
+        if length_m is not None and speed_guess is not None \
+                and length_m < limits.min_route_length_m(speed_guess):
+            raise ValueError(f"--length-m {length_m:g} is shorter than a run needs: at least "
+                             f"{limits.min_route_length_m(speed_guess):.0f} m at "
+                             f"{speed_guess:g} m/s")
+        road, run, text = _import(file, out, planning_problem, chain, length_m, smoothing,
+                                  vehicle, speed_mps, mu, limits)
     except ValueError as err:
         raise _fail(str(err)) from None
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text)
+    except OSError as err:
+        raise _fail(f"--out {str(out)!r} is not writable: {err}") from None
+    _report(road, run, out)
+
+
+def _field_type(model: Any, name: str) -> Any:
+    """A model field's type with its constraints, for checking an option against it."""
+    info = model.model_fields[name]
+    return Annotated.__class_getitem__((info.annotation, *info.metadata))  # type: ignore[attr-defined]
+
+
+def _field_max(model: Any, name: str) -> float:
+    """A model field's upper bound (``le``)."""
+    return next(float(m.le) for m in model.model_fields[name].metadata
+                if getattr(m, "le", None) is not None)
+
+
+def _check_like(option: str, value: float, kind: Any) -> None:
+    """Raise ``ValueError`` naming ``option`` unless ``value`` validates as ``kind``."""
+    from pydantic import TypeAdapter, ValidationError
+
+    try:
+        TypeAdapter(kind).validate_python(value)
+    except ValidationError as err:
+        raise ValueError(f"{option} {value:g}: {err.errors()[0]['msg']}") from None
+
+
+def _import(file: Path, out: Path, planning_problem: int | None, chain: list[int] | None,
+            length_m: float | None, smoothing: str, vehicle: str, speed_mps: float | None,
+            mu: float | None, limits: Any) -> tuple[Any, Any, str]:
+    """Read, import, choose the run, write the TOML text and validate it as a ``road``
+    scenario (the kind's own checks: lane against vehicle, curves against its turning circle,
+    the path's length, obstacles on the road), all before anything is written."""
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+
+    from mufusion.estimators.classes import PAPER_CLASSES
+    from mufusion.road.commonroad import (
+        UNDERGROUND_SURFACE,
+        choose_run,
+        clear_of_start,
+        import_road,
+        read_commonroad,
+        road_scenario_toml,
+    )
+    from mufusion.scenarios.loading import scenario_from_dict
+    from mufusion.vehicle.params import PRESETS
+
+    params = PRESETS[vehicle]
+    road = import_road(read_commonroad(file), problem_id=planning_problem, lanelet_ids=chain,
+                       length_m=length_m, smoothing=smoothing)
+    speed = speed_mps or road.start_speed_mps or DEFAULT_SPEED_MPS
+    run = choose_run(road, speed_mps=speed, limits=limits)
+    road = clear_of_start(road, run, vehicle_length_m=params.length_m,
+                          vehicle_width_m=params.width_m)
+    surfaces = {c.name: c for c in PAPER_CLASSES}
     if mu is not None:
         mu_value, mu_source = mu, f"--mu {mu:g}"
     elif road.underground in UNDERGROUND_SURFACE:
@@ -138,21 +177,21 @@ def import_commonroad(
         mu_source = (f"no underground label in the file ({road.underground or 'none'}) → the "
                      f"dry class value {mu_value:g} (paper Table I)")
     text = road_scenario_toml(road, run, vehicle=vehicle, mu=mu_value, mu_source=mu_source)
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(text)
-    except OSError as err:
-        raise _fail(f"--out {str(out)!r} is not writable: {err}") from None
+    scenario_from_dict(tomllib.loads(text), source=f"imported from {file.name} "
+                       f"({road.route_label})")
+    return road, run, text
+
+
+def _report(road: Any, run: Any, out: Path) -> None:
+    """Print what the import measured and what it dropped."""
     lanes = road.lanes
     nearer = np.minimum(lanes.left_m, lanes.right_m)
     console.print(
         f"{road.route_label}: {road.length_m:.0f} m, tightest bend R "
         f"{road.smallest_radius_m:.1f} m (consecutive points {road.smallest_vertex_radius_m:.1f}"
-        f" m); nearer lane boundary {nearer.min():.2f}–"
-        f"{nearer.max():.2f} m from the path → own lane "
-        f"{lanes.ego_width_m:.2f} m; opposing lane {lanes.opposing_width_m:.2f} m "
-        f"({100 * lanes.opposing_coverage:.0f} % of the path); μ {mu_value:g}; "
-        f"{len(road.obstacles)} obstacles"
+        f" m); nearer lane boundary {nearer.min():.2f}–{nearer.max():.2f} m from the path → "
+        f"own lane {lanes.ego_width_m:.2f} m; opposing lane {lanes.opposing_width_m:.2f} m "
+        f"({100 * lanes.opposing_coverage:.0f} % of the path); {len(road.obstacles)} obstacles"
     )
     for message in road.dropped:
         console.print(f"dropped {message}")

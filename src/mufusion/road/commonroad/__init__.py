@@ -45,6 +45,7 @@ __all__ = [
     "ImportedRoad",
     "LaneWidths",
     "RunChoice",
+    "RunLimits",
     "choose_run",
     "clear_of_start",
     "import_road",
@@ -64,10 +65,6 @@ UNDERGROUND_SURFACE: dict[str, str] = {
 """CommonRoad 2020a's ``environment/underground`` labels → the camera's surface classes
 (paper Table I, :data:`mufusion.estimators.classes.PAPER_CLASSES`); the class's value is the
 imported road's μ. ``unknown`` and an absent label have no class (``--mu`` or the dry default)."""
-
-START_ROOM_M = 10.0
-"""Least progress of the start [m]: the body (6.3 m truck) lies on the path behind it."""
-
 
 @dataclass(frozen=True)
 class ImportedRoad:
@@ -177,34 +174,56 @@ class RunChoice:
     duration_s: float
 
 
-def min_route_length_m(speed_mps: float, preview_s: float, vehicle_length_m: float,
-                       min_run_s: float) -> float:
-    """The shortest route a run of ``min_run_s`` at ``speed_mps`` fits on [m]: room behind the
-    start, the run, the planner's preview and the body beyond its end."""
-    return START_ROOM_M + speed_mps * (min_run_s + preview_s) + vehicle_length_m
+@dataclass(frozen=True)
+class RunLimits:
+    """What a run on an imported road must fit (the caller takes them from the scenario and
+    planner settings, which this stage cannot import).
+
+    Attributes
+    ----------
+    start_room_m
+        Least progress of the start [m] (the ``road`` kind's room behind the vehicle).
+    preview_s
+        The planner's horizon [s]: the plan should stay on the imported path.
+    vehicle_length_m
+        The body's length [m].
+    min_run_s, max_duration_s
+        The shortest run worth importing and the longest a scenario allows [s].
+    """
+
+    start_room_m: float
+    preview_s: float
+    vehicle_length_m: float
+    min_run_s: float
+    max_duration_s: float
+
+    def min_route_length_m(self, speed_mps: float) -> float:
+        """The shortest route a run of ``min_run_s`` at ``speed_mps`` fits on [m]: room behind
+        the start, the run, the planner's preview and the body beyond its end."""
+        return (self.start_room_m + speed_mps * (self.min_run_s + self.preview_s)
+                + self.vehicle_length_m)
 
 
-def choose_run(road: ImportedRoad, *, speed_mps: float, preview_s: float,
-               vehicle_length_m: float, min_run_s: float, max_duration_s: float) -> RunChoice:
-    """Start at the planning problem's position (at least :data:`START_ROOM_M` in) and run until
-    the planner's preview at ``speed_mps`` reaches the path's end.
+def choose_run(road: ImportedRoad, *, speed_mps: float, limits: RunLimits) -> RunChoice:
+    """Start at the planning problem's position (at least ``limits.start_room_m`` in; back
+    there if the problem's start leaves too little path) and run until the planner's preview at
+    ``speed_mps`` plus the body reaches the path's end.
 
     Raises
     ------
     ValueError
-        If the run would last less than ``min_run_s`` (the route is too short).
+        If the run would last less than ``limits.min_run_s`` (the route is too short).
     """
-    start = max(START_ROOM_M, road.start_s_m if road.start_s_m is not None else 0.0)
-    if start + min_route_length_m(speed_mps, preview_s, vehicle_length_m, min_run_s) \
-            - START_ROOM_M > road.length_m:
-        start = START_ROOM_M  # the problem's start leaves too little path: use the route's
-    room = road.length_m - start - speed_mps * preview_s - vehicle_length_m
-    duration = min(max_duration_s, math.floor(10.0 * room / speed_mps) / 10.0)
-    if duration < min_run_s:
-        need = min_route_length_m(speed_mps, preview_s, vehicle_length_m, min_run_s)
+    start = max(limits.start_room_m, road.start_s_m or 0.0)
+    if start - limits.start_room_m + limits.min_route_length_m(speed_mps) > road.length_m:
+        start = limits.start_room_m
+    room = road.length_m - start - speed_mps * limits.preview_s - limits.vehicle_length_m
+    duration = min(limits.max_duration_s, math.floor(10.0 * room / speed_mps) / 10.0)
+    if duration < limits.min_run_s:
         raise ValueError(f"{road.route_label}: the route is {road.length_m:.0f} m long, a run at "
-                         f"{speed_mps:g} m/s needs at least {need:.0f} m (--length-m, or a "
-                         "lower --speed-mps)")
+                         f"{speed_mps:g} m/s needs at least "
+                         f"{limits.min_route_length_m(speed_mps):.0f} m (--length-m, or a lower "
+                         "--speed-mps)")
     return RunChoice(round(start, 2), speed_mps, duration)
 
 
