@@ -259,13 +259,13 @@ def obstacles_on_route(file_scenario: Any, route: Route, s_m: np.ndarray, *,
     Parameters
     ----------
     lateral_range_m
-        ``(right, left)`` lateral offsets [m] of the road's edges: an obstacle whose centre lies
-        outside is not on this road and is dropped.
+        ``(right, left)`` lateral offsets [m] of the road's edges: an obstacle whose body
+        reaches beyond them is not on this road and is dropped.
 
     Returns
     -------
     The obstacles kept, sorted by s, and one message per obstacle dropped (outside the projection
-    domain, off the road, not present at the time step).
+    domain, not within the road, not present at the time step).
     """
     kept: list[ImportedObstacle] = []
     dropped: list[str] = []
@@ -285,10 +285,14 @@ def obstacles_on_route(file_scenario: Any, route: Route, s_m: np.ndarray, *,
                            "projection domain")
             continue
         s, d = sd
-        if not (0.0 <= s <= s_m[-1] and lateral_range_m[0] <= d <= lateral_range_m[1]):
-            dropped.append(f"obstacle {oid} at s = {s:.1f} m, d = {d:.1f} m: off the road")
-            continue
         length, width = _extent(obstacle.obstacle_shape)
+        # The road kind refuses an obstacle whose body leaves the road; one off this road
+        # (crossing traffic, a parked car on the verge) is not an obstacle of the route.
+        if not (0.0 <= s <= s_m[-1] and lateral_range_m[0] <= d - 0.5 * width
+                and d + 0.5 * width <= lateral_range_m[1]):
+            dropped.append(f"obstacle {oid} at s = {s:.1f} m, d = {d:.1f} m ({width:.1f} m "
+                           "wide): not within the road")
+            continue
         velocity = interval_mid(getattr(state, "velocity", 0.0) or 0.0)
         orientation = interval_mid(getattr(state, "orientation", 0.0) or 0.0)
         relative = orientation - float(np.interp(s, s_ref, heading))
