@@ -149,13 +149,15 @@ def planned_obstacle_clearance_m(
     states: np.ndarray,
     obstacles: Sequence[PlannerObstacle],
     params: VehicleParams,
+    dt_s: float = 0.0,
 ) -> float:
     """Smallest gap between a plan's predicted footprints and the obstacles [m], negative when
     they overlap (minus the depth); ``inf`` without obstacles.
 
     Footprints and obstacles are rectangles in road coordinates ``(s, d)``, the footprint
     centred ``params.body_centre_ahead_of_cog_m`` ahead of the reference point along the heading
-    error: exact on a straight road, the planner's own frame on a curved one.
+    error: exact on a straight road, the planner's own frame on a curved one. Row ``k`` of
+    ``states`` is ``k · dt_s`` after the first: a moving obstacle is where it is then.
 
     Examples
     --------
@@ -174,9 +176,11 @@ def planned_obstacle_clearance_m(
     ahead = params.body_centre_ahead_of_cog_m
     ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
                             params.length_m, params.width_m)
+    times_s = dt_s * np.arange(len(s), dtype=float)
     return min(
-        float(np.min(signed_clearance_m(
-            ego, rectangle_corners(ob.s_m, ob.d_m, 0.0, ob.length_m, ob.width_m))))
+        float(np.min(signed_clearance_m(ego, rectangle_corners(
+            ob.s_m + ob.speed_mps * times_s if ob.speed_mps else ob.s_m, ob.d_m, 0.0,
+            ob.length_m, ob.width_m))))
         for ob in obstacles
     )
 
