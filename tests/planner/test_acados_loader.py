@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from mufusion.planner import acados_loader
 from mufusion.planner.acados_loader import AcadosUnavailable, build_lock, load_acados_template
 
 
@@ -53,3 +54,21 @@ def test_a_solver_directory_that_cannot_be_made_is_named(tmp_path: Path) -> None
     with pytest.raises(AcadosUnavailable, match=r"cannot lock the solver directory .*a-file"):
         with build_lock(blocker / "tamp_0123456789abcdef"):
             pass
+
+
+def test_a_read_only_solver_directory_is_used_without_the_lock(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # A cache built elsewhere and shared read-only: no lock file can be made, nothing is built.
+    # (Tests may run as root, which writes anyway: the refusal is simulated.)
+    export = tmp_path / "tamp_0123456789abcdef"
+    export.mkdir()
+
+    def refused(path, mode="r"):
+        raise PermissionError(13, "Read-only file system", str(path))
+
+    monkeypatch.setattr(acados_loader, "open", refused, raising=False)
+    monkeypatch.setattr(acados_loader.os, "access", lambda path, mode: False)
+    with build_lock(export):
+        entered = True
+    assert entered and not (export / ".build.lock").exists()

@@ -45,7 +45,9 @@ def build_lock(export: Path) -> Iterator[None]:
     compiling into the same files at once (interleaved object files, or a library loaded while
     the linker still writes it). The generated library names its directory by absolute path, so
     building elsewhere and renaming is not an option. The lock is ``flock`` on ``.build.lock``
-    in ``export``: the kernel releases it when its holder exits, even killed mid-build.
+    in ``export``: the kernel releases it when its holder exits, even killed mid-build. A
+    directory that exists but cannot be written (a cache built elsewhere and shared read-only) is
+    used without the lock: nothing can be built there, so there is nothing to wait for.
 
     Raises
     ------
@@ -58,6 +60,9 @@ def build_lock(export: Path) -> Iterator[None]:
         export.mkdir(parents=True, exist_ok=True)
         handle = open(export / ".build.lock", "a")
     except OSError as exc:
+        if export.is_dir() and not os.access(export, os.W_OK):
+            yield
+            return
         raise AcadosUnavailable(f"cannot lock the solver directory {export}: {exc}") from exc
     with handle:  # closing the descriptor releases the lock
         fcntl.flock(handle, fcntl.LOCK_EX)
