@@ -20,6 +20,7 @@ from mufusion.sim.settings import LaneRecoverySettings
 from mufusion.sim.supervision import (
     planned_footprint_violation_m,
     planned_obstacle_clearance_m,
+    planned_obstacle_hit,
     plausible_estimate,
     relaxed_estimate,
 )
@@ -162,7 +163,7 @@ class LaneRecovery(Supervisor):
         # A plan predicted to hit an obstacle is never preferred to one predicted to pass it,
         # however much further the latter leaves the lane (evading, the road band).
         def rank(candidate: Plan, violation: float) -> tuple[bool, float]:
-            hits = planned_obstacle_clearance_m(candidate.states, ctx.obstacles, self.params) < 0.0
+            hits = planned_obstacle_hit(candidate.states, ctx.obstacles, self.params)
             return (hits, np.inf if candidate.fallback else violation)
 
         best = (rank(plan, before), before, plan, planned_with, held, self.planner.memory)
