@@ -102,6 +102,22 @@ def signed_clearance_m(corners_a: np.ndarray, corners_b: np.ndarray) -> np.ndarr
     return np.where(penetration > 0.0, -penetration, distance)
 
 
+def rectangles_overlap(corners_a: np.ndarray, corners_b: np.ndarray) -> np.ndarray:
+    """Whether pairs of rectangles overlap (batch shapes broadcast): exactly where
+    :func:`signed_clearance_m` is negative, for finite corners, without its distances.
+
+    Examples
+    --------
+    >>> a = rectangle_corners(0.0, 0.0, 0.0, 2.0, 2.0)
+    >>> bool(rectangles_overlap(a, rectangle_corners(1.5, 0.0, 0.0, 2.0, 2.0)))
+    True
+    >>> bool(rectangles_overlap(a, rectangle_corners(2.0, 0.0, 0.0, 2.0, 2.0)))  # touching
+    False
+    """
+    a, b = np.broadcast_arrays(np.asarray(corners_a, float), np.asarray(corners_b, float))
+    return _penetration(a, b) > 0.0
+
+
 # Plain-float versions for one rectangle pair at a time: the closed loop checks one footprint per
 # tick, where numpy's per-call overhead costs ten times the arithmetic. Same algorithm, same
 # corner order; the tests hold them equal to the array versions to rounding.

@@ -85,7 +85,7 @@ import numpy as np
 from mufusion.configurations import MU_HAT_MAX, FrictionEstimate
 from mufusion.fusion import Z95, local_surface_bound
 from mufusion.planner import PlannerObstacle
-from mufusion.road.geometry import rectangle_corners, signed_clearance_m
+from mufusion.road.geometry import rectangle_corners, rectangles_overlap, signed_clearance_m
 
 # The settings live apart (the scenario schema reads them); importers of this module keep them.
 from mufusion.sim.settings import LaneRecoverySettings as LaneRecoverySettings
@@ -194,8 +194,9 @@ def planned_obstacle_hit(
     :func:`~mufusion.road.geometry.signed_clearance_m` projects onto the obstacle's edge normals,
     the coordinate axes, and these projections are the boxes' extents bit for bit, so where the
     boxes do not overlap its penetration is ≤ 0 and the clearance the distance, ≥ 0. The other
-    states are judged by :func:`planned_obstacle_clearance_m`'s own computation. Non-finite
-    input takes the full computation.
+    states are judged by that penetration itself
+    (:func:`~mufusion.road.geometry.rectangles_overlap`: the clearance is negative exactly where
+    it is positive). Non-finite input takes the full computation.
 
     Examples
     --------
@@ -220,7 +221,7 @@ def planned_obstacle_hit(
     for box in boxes:
         overlap = np.minimum(ego_hi, box.max(axis=0)) - np.maximum(ego_lo, box.min(axis=0))
         near = np.all(overlap > 0.0, axis=-1)
-        if np.any(near) and float(np.min(signed_clearance_m(ego[near], box))) < 0.0:
+        if np.any(near) and bool(np.any(rectangles_overlap(ego[near], box))):
             return True
     return False
 
