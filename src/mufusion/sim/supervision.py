@@ -243,6 +243,13 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     >>> np.round(relaxed_estimate(est, 0.5).mu_hat, 6).tolist()
     [0.3, 0.4]
     """
+    return relaxed_by(estimate, relaxation_gain(estimate), alpha)
+
+
+def relaxation_gain(estimate: FrictionEstimate) -> np.ndarray | None:
+    """How far :func:`relaxed_estimate` moves μ̂ at ``alpha = 1``: the target less μ̂, never
+    negative; None without a posterior or when the mean adds nothing. A caller that relaxes one
+    estimate by several fractions computes it once (:func:`relaxed_by`)."""
     if estimate.fused is None:
         return None
     mu_hat = np.asarray(estimate.mu_hat, dtype=float)
@@ -252,7 +259,18 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     gain = np.maximum(target - mu_hat, 0.0)
     if not np.any(gain > 1e-9):
         return None
-    return dataclasses.replace(estimate, mu_hat=mu_hat + alpha * gain)
+    return gain
+
+
+def relaxed_by(
+    estimate: FrictionEstimate, gain: np.ndarray | None, alpha: float
+) -> FrictionEstimate | None:
+    """``estimate`` with μ̂ raised by ``alpha`` times its :func:`relaxation_gain` ``gain``
+    (None for a gain of None): :func:`relaxed_estimate` without computing the gain again."""
+    if gain is None:
+        return None
+    return dataclasses.replace(
+        estimate, mu_hat=np.asarray(estimate.mu_hat, dtype=float) + alpha * gain)
 
 
 def plausible_estimate(estimate: FrictionEstimate) -> FrictionEstimate | None:
