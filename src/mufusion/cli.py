@@ -17,6 +17,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from mufusion.cli_commonroad import import_commonroad
 from mufusion.cli_progress import print_table, progress_bar, run_specs
 
 app = typer.Typer(
@@ -30,6 +31,7 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 console = Console(stderr=True)
+app.command("import-commonroad")(import_commonroad)
 
 
 @app.callback()

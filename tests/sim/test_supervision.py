@@ -337,6 +337,19 @@ def test_planned_obstacle_hit_agrees_with_the_clearance() -> None:
         assert hit == (planned_obstacle_clearance_m(x, obstacles, TRUCK) < 0.0)
         answers.add(hit)
     assert answers == {True, False}
+    # A moving obstacle (one oncoming): row k of the plan meets it where it is k · dt later.
+    moving = [PlannerObstacle(s_m=40.0, d_m=0.0, length_m=4.5, width_m=1.8, speed_mps=-10.0),
+              PlannerObstacle(s_m=20.0, d_m=-1.0, length_m=4.5, width_m=1.8, speed_mps=8.0)]
+    moving_answers = set()
+    for _ in range(200):
+        x = np.zeros((41, 6))
+        x[:, State.s] = np.linspace(0.0, 60.0, 41) + rng.uniform(-1.0, 1.0)
+        x[:, State.d] = rng.uniform(-4.0, 4.0) + rng.normal(0.0, 0.3, 41)
+        x[:, State.dpsi] = rng.normal(0.0, 0.1, 41)
+        hit = planned_obstacle_hit(x, moving, TRUCK, 0.1)
+        assert hit == (planned_obstacle_clearance_m(x, moving, TRUCK, 0.1) < 0.0)
+        moving_answers.add(hit)
+    assert moving_answers == {True, False}
     x[:, State.d] = np.nan
     assert planned_obstacle_hit(x, obstacles, TRUCK) is False
     assert planned_obstacle_hit(x, [], TRUCK) is False

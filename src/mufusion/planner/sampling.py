@@ -62,13 +62,19 @@ def violation_m(
     lane_d_max_m: float,
     params: VehicleParams,
     margin_m: float,
+    dt_s: float = 0.0,
 ) -> np.ndarray:
-    """Summed footprint violation [m] of trajectories ``states (N+1, 6, M)`` → ``(M,)``."""
+    """Summed footprint violation [m] of trajectories ``states (N+1, 6, M)`` → ``(M,)``.
+
+    Stage ``k`` is ``k · dt_s`` after the first state: a moving obstacle is where it is then
+    (:meth:`~mufusion.planner.config.PlannerObstacle.s_at_stages`).
+    """
     s, d = states[1:, State.s], states[1:, State.d]
     half_w = 0.5 * params.width_m
     total = np.maximum(lane_d_min_m - d, 0.0) + np.maximum(d - lane_d_max_m, 0.0)
     for ob in obstacles:
-        overlap = np.abs(s - ob.s_m) < 0.5 * params.length_m + 0.5 * ob.length_m + margin_m
+        reach = 0.5 * params.length_m + 0.5 * ob.length_m + margin_m
+        overlap = np.abs(s - ob.s_at_stages(s.shape, dt_s)) < reach
         clear = 0.5 * ob.width_m + half_w + margin_m
         total = total + np.where(overlap, np.maximum(clear - np.abs(d - ob.d_m), 0.0), 0.0)
     return total.sum(axis=0)
@@ -360,7 +366,8 @@ def sampled_guess(
     """
     try:
         shifted_violation = float(violation_m(
-            guess_x[:, :, None], obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m
+            guess_x[:, :, None], obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m,
+            cfg.dt_s,
         )[0])
         if continuing and shifted_violation <= sc.trigger_violation_m:
             return guess_x, guess_u, False
@@ -377,7 +384,7 @@ def sampled_guess(
             tracking = tracking_cost(both, v_ref, d_ref)
         tracking[0] *= SHIFTED_DISCOUNT
         cost = tracking + VIOLATION_WEIGHT * violation_m(
-            both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m
+            both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m, cfg.dt_s
         )
         cost = np.where(np.isfinite(cost), cost, np.inf)
         best = int(np.argmin(cost))

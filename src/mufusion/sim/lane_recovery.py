@@ -172,7 +172,8 @@ class LaneRecovery(Supervisor):
         # A plan predicted to hit an obstacle is never preferred to one predicted to pass it,
         # however much further the latter leaves the lane (evading, the road band).
         def rank(candidate: Plan, violation: float) -> tuple[bool, float]:
-            hits = planned_obstacle_hit(candidate.states, ctx.obstacles, self.params)
+            hits = planned_obstacle_hit(candidate.states, ctx.obstacles, self.params,
+                                        candidate.dt_s)
             return (hits, np.inf if candidate.fallback else violation)
 
         best = (rank(plan, before), before, plan, planned_with, held, self.planner.memory)
@@ -221,7 +222,8 @@ class LaneRecovery(Supervisor):
         top = plausible_estimate(estimate)
         if top is not None:
             check = ctx.plan(top, "evade")
-            gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params)
+            gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params,
+                                               check.dt_s)
             if not check.fallback and gap < 0.0:
                 brake = ctx.plan(estimate, "emergency")
                 if not brake.fallback:

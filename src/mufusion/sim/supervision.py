@@ -149,13 +149,15 @@ def planned_obstacle_clearance_m(
     states: np.ndarray,
     obstacles: Sequence[PlannerObstacle],
     params: VehicleParams,
+    dt_s: float = 0.0,
 ) -> float:
     """Smallest gap between a plan's predicted footprints and the obstacles [m], negative when
     they overlap (minus the depth); ``inf`` without obstacles.
 
     Footprints and obstacles are rectangles in road coordinates ``(s, d)``, the footprint
     centred ``params.body_centre_ahead_of_cog_m`` ahead of the reference point along the heading
-    error: exact on a straight road, the planner's own frame on a curved one.
+    error: exact on a straight road, the planner's own frame on a curved one. Row ``k`` of
+    ``states`` is ``k · dt_s`` after the first: a moving obstacle is where it is then.
 
     Examples
     --------
@@ -174,20 +176,30 @@ def planned_obstacle_clearance_m(
     ahead = params.body_centre_ahead_of_cog_m
     ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
                             params.length_m, params.width_m)
-    return min(
-        float(np.min(signed_clearance_m(
-            ego, rectangle_corners(ob.s_m, ob.d_m, 0.0, ob.length_m, ob.width_m))))
-        for ob in obstacles
-    )
+    return min(float(np.min(signed_clearance_m(ego, box)))
+               for box in _obstacle_corners(obstacles, len(s), dt_s))
+
+
+def _obstacle_corners(
+    obstacles: Sequence[PlannerObstacle], rows: int, dt_s: float
+) -> list[np.ndarray]:
+    """Each obstacle's corners in ``(s, d)``: ``(4, 2)``, or ``(rows, 4, 2)`` for a moving one,
+    row ``k`` where it is ``k · dt_s`` after the first."""
+    times_s = dt_s * np.arange(rows, dtype=float)
+    return [rectangle_corners(ob.s_m + ob.speed_mps * times_s if ob.speed_mps else ob.s_m,
+                              ob.d_m, 0.0, ob.length_m, ob.width_m)
+            for ob in obstacles]
 
 
 def planned_obstacle_hit(
     states: np.ndarray,
     obstacles: Sequence[PlannerObstacle],
     params: VehicleParams,
+    dt_s: float = 0.0,
 ) -> bool:
     """Whether a plan's predicted footprints overlap an obstacle: the same answer as
-    ``planned_obstacle_clearance_m(states, obstacles, params) < 0.0``, at a fraction of its cost.
+    ``planned_obstacle_clearance_m(states, obstacles, params, dt_s) < 0.0``, at a fraction of
+    its cost.
 
     Only where a footprint's bounding box overlaps an obstacle's (the obstacles are axis-aligned
     in ``(s, d)``) can the rectangles overlap: the separating-axis test of
@@ -210,18 +222,19 @@ def planned_obstacle_hit(
     if not obstacles:
         return False
     x = np.asarray(states, dtype=float)
-    boxes = [rectangle_corners(ob.s_m, ob.d_m, 0.0, ob.length_m, ob.width_m) for ob in obstacles]
+    boxes = _obstacle_corners(obstacles, len(x), dt_s)
     if not (np.all(np.isfinite(x)) and all(np.all(np.isfinite(box)) for box in boxes)):
-        return planned_obstacle_clearance_m(x, obstacles, params) < 0.0
+        return planned_obstacle_clearance_m(x, obstacles, params, dt_s) < 0.0
     s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
     ahead = params.body_centre_ahead_of_cog_m
     ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
                             params.length_m, params.width_m)
     ego_lo, ego_hi = ego.min(axis=-2), ego.max(axis=-2)
     for box in boxes:
-        overlap = np.minimum(ego_hi, box.max(axis=0)) - np.maximum(ego_lo, box.min(axis=0))
+        overlap = np.minimum(ego_hi, box.max(axis=-2)) - np.maximum(ego_lo, box.min(axis=-2))
         near = np.all(overlap > 0.0, axis=-1)
-        if np.any(near) and bool(np.any(rectangles_overlap(ego[near], box))):
+        if np.any(near) and bool(np.any(
+                rectangles_overlap(ego[near], box[near] if box.ndim == 3 else box))):
             return True
     return False
 
