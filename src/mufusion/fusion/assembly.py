@@ -300,3 +300,41 @@ def local_surface_bound(data: FusionData, s_eval_m: np.ndarray) -> np.ndarray:
     s_end = float(np.max(data.s_m[surface]))
     out[s_eval <= s_end + 1e-9] = bound
     return out
+
+
+def declared_upper_bound(data: FusionData, s_eval_m: np.ndarray) -> np.ndarray:
+    """The highest μ the estimates' declared errors allow, at ``s_eval_m`` [-].
+
+    Each estimate ``(y, m)`` says ``μ ≤ y + m`` at its position when its error is within its
+    declared margin (the other half of the hard bound ``μ ≥ y − m`` safe mode caps μ̂ with); at a
+    position with several estimates the lowest such bound holds. Strictly between two data
+    positions the larger of the two neighbours' bounds (the surface may change between them and
+    neither estimate rules out the other's); outside the data nothing is declared: ``+inf``.
+
+    What a departure from the guaranteed μ̂ (lane recovery) may assume at most: planning above it
+    plans with a friction every estimate there declares impossible (docs/decisions/0061).
+
+    Examples
+    --------
+    >>> d = FusionData([0.0, 1.0, 2.0], [0.9, 0.25, 0.25], [0.025, 0.15, 0.15])
+    >>> declared_upper_bound(d, np.array([0.0, 0.5, 2.0, 3.0])).round(3).tolist()
+    [0.925, 0.925, 0.4, inf]
+    """
+    s_eval = np.asarray(s_eval_m, dtype=float)
+    if data.s_m.size == 0:
+        return np.full(s_eval.shape, np.inf)
+    hi = data.mu + data.margin
+    order = np.lexsort((hi, data.s_m))  # by s, then the lowest bound first
+    s_sorted, hi_sorted = data.s_m[order], hi[order]
+    first = np.ones(s_sorted.size, dtype=bool)
+    first[1:] = np.diff(s_sorted) > 1e-9
+    us, ub = s_sorted[first], hi_sorted[first]
+    idx = np.searchsorted(us, s_eval)
+    left, right = np.maximum(idx - 1, 0), np.minimum(idx, us.size - 1)
+    at_left = np.abs(s_eval - us[left]) <= 1e-9
+    at_right = np.abs(s_eval - us[right]) <= 1e-9
+    bound = np.maximum(ub[left], ub[right])
+    bound = np.where(at_right, ub[right], bound)
+    bound = np.where(at_left, ub[left], bound)
+    outside = ((s_eval < us[0]) | (s_eval > us[-1])) & ~(at_left | at_right)
+    return np.where(outside, np.inf, bound)
