@@ -22,6 +22,7 @@ from mufusion.fusion.data import (
     check_mode,
     check_range,
 )
+from mufusion.fusion.safe import SAME_S_TOL_M, envelope_index
 
 GRID_STEP_M = 1.0
 """Spacing ds of the fusion grid [m] (paper: s ∈ {0, ds, …, s_f}; the authors' code used ≈ 2 m)."""
@@ -327,14 +328,10 @@ def declared_upper_bound(data: FusionData, s_eval_m: np.ndarray) -> np.ndarray:
     order = np.lexsort((hi, data.s_m))  # by s, then the lowest bound first
     s_sorted, hi_sorted = data.s_m[order], hi[order]
     first = np.ones(s_sorted.size, dtype=bool)
-    first[1:] = np.diff(s_sorted) > 1e-9
+    first[1:] = np.diff(s_sorted) > SAME_S_TOL_M
     us, ub = s_sorted[first], hi_sorted[first]
-    idx = np.searchsorted(us, s_eval)
-    left, right = np.maximum(idx - 1, 0), np.minimum(idx, us.size - 1)
-    at_left = np.abs(s_eval - us[left]) <= 1e-9
-    at_right = np.abs(s_eval - us[right]) <= 1e-9
+    left, right, at_left, at_right, outside = envelope_index(us, s_eval)
     bound = np.maximum(ub[left], ub[right])
     bound = np.where(at_right, ub[right], bound)
     bound = np.where(at_left, ub[left], bound)
-    outside = ((s_eval < us[0]) | (s_eval > us[-1])) & ~(at_left | at_right)
     return np.where(outside, np.inf, bound)
