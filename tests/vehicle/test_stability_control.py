@@ -11,12 +11,15 @@ from mufusion.vehicle.plant import Plant, initial_state
 from mufusion.vehicle.stability_control import StabilityControlSettings, YawStabilityController
 
 
-def test_it_acts_only_on_a_yaw_rate_beyond_what_steering_and_lateral_acceleration_explain() -> None:
+def test_it_acts_only_on_a_yaw_rate_beyond_what_steering_and_cornering_explain() -> None:
     esc = YawStabilityController(TRUCK, StabilityControlSettings())
     wheelbase = TRUCK.cog_to_front_axle_m + TRUCK.cog_to_rear_axle_m
     # Turning as the steering asks (ψ̇ = v δ / L, with the lateral acceleration to match).
     assert esc.moment(15.0, 15.0 * 0.05 / wheelbase, 0.05, 15.0**2 * 0.05 / wheelbase, 0.9) == (
         0.0, 0.0)
+    # Cornering at speed with little (here slightly opposite) steering: the lateral acceleration
+    # explains the yaw rate; braking against it turned the truck out of a 150 m arc (0061).
+    assert esc.moment(17.0, 0.08, -0.008, 17.0 * 0.08, 0.9) == (0.0, 0.0)
     # Slow, or within the deadband: passive.
     assert esc.moment(2.0, 1.0, 0.0, 0.0, 0.9) == (0.0, 0.0)
     assert esc.moment(15.0, 0.04, 0.0, 0.0, 0.9) == (0.0, 0.0)

@@ -9,14 +9,16 @@ moment ``M_z`` about the centre of gravity and the longitudinal force ``|M_z| / 
 braked wheel. That wheel can deliver at most its friction, ``μ F_z,wheel`` (its ABS keeps it near
 the peak), which bounds the moment; its lost lateral force is not represented.
 
-The target yaw rate is the single-track steady state for the measured steering angle and speed,
-``v δ / L`` (both presets' tires have the same stiffness per unit load front and rear, so the
-understeer gradient is zero), held within the yaw rate the measured lateral acceleration supports,
-``(|a_y| + a_allow) / v`` (in steady cornering ``ψ̇ = a_y / v``: a vehicle turning faster than its
-lateral acceleration explains is rotating, not cornering). The controller acts when the yaw rate
-exceeds that target in magnitude by more than a deadband, with the moment that would remove the
-excess within ``response_time_s``: ``M_z = −I_z (ψ̇ − ψ̇_target) / τ``, bounded as above. It reads
-the vehicle's own signals only (yaw-rate sensor, steering angle, wheel-speed/IMU speed and lateral
+Two yaw rates explain a vehicle's rotation: the single-track steady state for the measured
+steering angle and speed, ``v δ / L`` (both presets' tires have the same stiffness per unit load
+front and rear, so the understeer gradient is zero), and the rate at which the velocity vector
+turns, ``a_y / v`` (in cornering ``ψ̇ = a_y / v − β̇``: a yaw rate beyond it is the body slip
+growing, the vehicle rotating rather than cornering). Oversteer is a yaw rate beyond both (each
+counted in the direction of the rotation); the controller acts when that excess passes a
+deadband, with the moment that would remove it within ``response_time_s``:
+``M_z = −sign(ψ̇) I_z · excess / τ``, bounded as above. Acting on the steering's rate alone
+braked trucks that corner with little steering at speed (docs/decisions/0061). It reads the
+vehicle's own signals only (yaw-rate sensor, steering angle, wheel-speed/IMU speed and lateral
 acceleration); the bound is the physics of the braked wheel, not something the controller knows.
 
 Off by default (``sim.esc``): docs/decisions/0061 measured it on the general grid's failures.
@@ -39,11 +41,8 @@ class StabilityControlSettings:
     Attributes
     ----------
     yaw_rate_deadband_radps
-        Excess of the yaw rate over its target before the controller acts [rad/s], ≥ 0
+        Excess of the yaw rate over what explains it before the controller acts [rad/s], ≥ 0
         (production activation thresholds are a few degrees per second).
-    lateral_accel_allowance_mps2
-        Lateral acceleration added to the measured one when bounding the target [m/s²], ≥ 0
-        (the sensor's offset and a road's bank, ≈ 0.05 g).
     response_time_s
         Time in which the moment would remove the excess [s], > 0 (a brake's build-up time).
     min_speed_mps
@@ -51,7 +50,6 @@ class StabilityControlSettings:
     """
 
     yaw_rate_deadband_radps: float = 0.05
-    lateral_accel_allowance_mps2: float = 0.5
     response_time_s: float = 0.2
     min_speed_mps: float = 3.0
 
@@ -75,7 +73,7 @@ class YawStabilityController:
     >>> esc = YawStabilityController(TRUCK, StabilityControlSettings())
     >>> esc.moment(15.0, 0.2, 3.4 * 0.2 / 15.0, 3.0, 0.9)  # turning as the steering asks
     (0.0, 0.0)
-    >>> mz, fx = esc.moment(15.0, -0.6, -0.09, 6.0, 0.9)  # a right turn rotating too fast
+    >>> mz, fx = esc.moment(15.0, -0.6, -0.09, -6.0, 0.9)  # a right turn rotating too fast
     >>> mz > 0.0 > fx
     True
     """
@@ -103,12 +101,15 @@ class YawStabilityController:
         cfg = self.settings
         if not speed_mps > cfg.min_speed_mps:
             return 0.0, 0.0
-        target = speed_mps * steer_rad / self._wheelbase_m
-        bound = (abs(accel_y_mps2) + cfg.lateral_accel_allowance_mps2) / speed_mps
-        target = min(max(target, -bound), bound)
-        if not abs(yaw_rate_radps) > abs(target) + cfg.yaw_rate_deadband_radps:
+        explained = 0.0
+        for rate in (speed_mps * steer_rad / self._wheelbase_m, accel_y_mps2 / speed_mps):
+            if rate * yaw_rate_radps > 0.0:  # a rate in the rotation's direction explains it
+                explained = max(explained, abs(rate))
+        excess = abs(yaw_rate_radps) - explained
+        if not excess > cfg.yaw_rate_deadband_radps:
             return 0.0, 0.0
-        moment = -self.params.yaw_inertia_kgm2 * (yaw_rate_radps - target) / cfg.response_time_s
+        moment = -math.copysign(
+            self.params.yaw_inertia_kgm2 * excess / cfg.response_time_s, yaw_rate_radps)
         cap = mu_front * self._front_wheel_load_n * self._half_track_m
         moment = min(max(moment, -cap), cap)
         return moment, -abs(moment) / self._half_track_m
