@@ -125,13 +125,15 @@ def test_relaxation_never_trusts_the_local_estimate_beyond_its_declared_error() 
     assert full is not None
     # Capped: the mean's 0.92 would over-estimate.
     np.testing.assert_allclose(full.mu_hat[GRID < 30.0], 0.9)
-    np.testing.assert_allclose(full.mu_hat[GRID >= 30.0], 0.7)  # another surface: the mean
+    # Another surface: the mean (0.7), but not above what its class declares possible (0.5 + 0.1).
+    np.testing.assert_allclose(full.mu_hat[GRID >= 30.0], 0.6)
     np.testing.assert_allclose(relaxed_estimate(est, 0.5).mu_hat[GRID < 30.0], 0.75)
-    # Without the local estimate the mean is the target, as before.
+    # Without the local estimate the mean is the target within the classes' declared bounds.
     unmeasured = FrictionEstimate(GRID, np.full(51, 0.6), False, None, fused=post,
                                   data=assemble_inputs(GRID, camera_mu, camera_margin,
                                                        mode="safe"))
-    np.testing.assert_allclose(relaxed_estimate(unmeasured, 1.0).mu_hat, mean)
+    declared = np.where(GRID < 30.0, 1.0, 0.6)
+    np.testing.assert_allclose(relaxed_estimate(unmeasured, 1.0).mu_hat, np.minimum(mean, declared))
     with pytest.raises(ValueError, match=r"probing\.max_decel_mps2"):
         ProbingSettings(max_decel_mps2=9.0)
 
@@ -485,3 +487,22 @@ def test_lane_recovery_holds_its_relaxation_and_gives_it_back_after_the_curve() 
     last = est[est["t_s"] == est["t_s"].max()]
     # Back at the class's lower bound beyond the local estimate's reach (safe mode's guarantee).
     assert float(last[last["s_ahead_m"] == 20.0]["mu_hat"].iloc[0]) == pytest.approx(0.6)
+
+
+def test_relaxation_never_plans_above_the_class_the_camera_reports_ahead() -> None:
+    # The general grid's drop inside a curve (docs/decisions/0061): the local estimate 0.925 ±
+    # 0.025 on μ 0.9, the camera's class 0.25 ± 0.15 from 16 m on. The posterior mean stays at
+    # 0.9 over the low class; relaxing towards it planned the drop at up to 0.9 where every
+    # estimate there says μ ≤ 0.4.
+    camera_mu = np.where(GRID < 16.0, 0.8, 0.25)
+    camera_margin = np.where(GRID < 16.0, 0.2, 0.15)
+    data = assemble_inputs(GRID, camera_mu, camera_margin, local_mu=0.925, mode="safe")
+    post = FusedEstimate(GRID, np.full(51, 0.9), np.full(51, 0.013), np.full(51, 0.87),
+                         np.full(51, 0.87))
+    est = FrictionEstimate(GRID, np.where(GRID < 16.0, 0.6, 0.1), True, 0.925, fused=post,
+                           data=data)
+    full = relaxed_estimate(est, 1.0)
+    assert full is not None
+    np.testing.assert_allclose(full.mu_hat[GRID < 16.0], 0.9)
+    np.testing.assert_allclose(full.mu_hat[GRID >= 16.0], 0.4)
+    np.testing.assert_allclose(relaxed_estimate(est, 0.5).mu_hat[GRID >= 16.0], 0.25)

@@ -27,7 +27,9 @@ only with a posterior (F, F-safe). The target is the posterior mean, but never a
 local estimate guarantees on the surface it measured (``μ_l − m_l``, carried over the camera's
 class under the vehicle; :func:`mufusion.fusion.local_surface_bound`): the mean follows the
 local value itself, and trusting that beyond its declared error over-estimated by up to ``m_l``
-(docs/decisions/0043, "Lane recovery trusts a measurement within its declared error").
+(docs/decisions/0043, "Lane recovery trusts a measurement within its declared error"), and
+nowhere above what the estimates there declare possible (``y + m``: the mean can sit far above
+the class the camera reports ahead; docs/decisions/0061).
 The ``α`` adopted is held: the next step plans with it first and searches upwards from it if
 that plan leaves the lane; if it keeps the lane, one step less is tried, and adopted if it keeps
 the lane too. Without the hold each step started from the
@@ -83,7 +85,7 @@ from enum import StrEnum
 import numpy as np
 
 from mufusion.configurations import MU_HAT_MAX, FrictionEstimate
-from mufusion.fusion import Z95, local_surface_bound
+from mufusion.fusion import Z95, declared_upper_bound, local_surface_bound
 from mufusion.planner import PlannerObstacle
 from mufusion.road.geometry import rectangle_corners, rectangles_overlap, signed_clearance_m
 
@@ -244,8 +246,12 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     a posterior or when the mean adds nothing.
 
     The target is the mean capped, where the data hold a local estimate, by what it guarantees
-    on the surface it measured (:func:`mufusion.fusion.local_surface_bound`); beyond that
-    surface, and without a local estimate, it is the mean.
+    on the surface it measured (:func:`mufusion.fusion.local_surface_bound`), and everywhere by
+    the highest friction the estimates' declared errors allow
+    (:func:`mufusion.fusion.declared_upper_bound`, ``y + m``): the posterior mean can lie far
+    above a class the camera reports ahead (0.9 over a class of 0.25 ± 0.15 once the local
+    estimate on 0.9 anchors it), and plans relaxed to it reached a drop too fast
+    (docs/decisions/0061). Without data the target is the mean.
 
     Examples
     --------
@@ -268,7 +274,8 @@ def relaxation_gain(estimate: FrictionEstimate) -> np.ndarray | None:
     mu_hat = np.asarray(estimate.mu_hat, dtype=float)
     target = np.asarray(estimate.fused.mean, dtype=float)
     if estimate.data is not None:
-        target = np.minimum(target, local_surface_bound(estimate.data, estimate.s_m))
+        target = np.minimum(np.minimum(target, local_surface_bound(estimate.data, estimate.s_m)),
+                            declared_upper_bound(estimate.data, estimate.s_m))
     gain = np.maximum(target - mu_hat, 0.0)
     if not np.any(gain > 1e-9):
         return None
