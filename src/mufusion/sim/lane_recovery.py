@@ -133,10 +133,21 @@ class LaneRecovery(Supervisor):
         if not hold:
             self.alpha = 0.0
         held = self.alpha
+        # An evasion predicted to hit an obstacle is reviewed even where it keeps to the band
+        # it may use (the road, evading): "keeps the lane" says nothing about the obstacle.
+        futile = (mode == "evade" and self.settings.brake_when_futile and not plan.fallback
+                  and planned_obstacle_hit(plan.states, ctx.obstacles, self.params, plan.dt_s))
         # Without a posterior (GT, L, P) there is nothing to relax: skip the footprint check,
-        # which would run at every planning step.
+        # which would run at every planning step. Their μ̂ has no upper edge to check an evasion
+        # against: the check re-plans the evasion with μ̂ itself (one more iteration, so that a
+        # plan still converging is not taken for a futile one).
         if self._relaxed(estimate, 1.0) is None:
             self.alpha = 0.0
+            if futile:
+                braking = self._brake_if_futile(ctx, estimate, estimate)
+                if braking is not None:
+                    self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, 0.0))
+                    return braking, estimate
             return plan, estimate
         planned_with = self._relaxed(estimate, held) if held > 0.0 else estimate
         assert planned_with is not None
@@ -145,7 +156,7 @@ class LaneRecovery(Supervisor):
         alphas = (0.0, *self.settings.steps)
         t = ctx.t_s
         # No friction-limited plan at all (the solve failed) counts as not keeping the lane.
-        if before <= tolerance and not plan.fallback:
+        if before <= tolerance and not plan.fallback and not futile:
             if held == 0.0:
                 return plan, estimate
             # The lane is kept with the relaxation held: try one step less of it, so that the
@@ -190,7 +201,7 @@ class LaneRecovery(Supervisor):
         (every_one_hits, _), violation, plan, adopted, alpha, memory = best
         self.planner.restore(memory)
         if mode == "evade" and every_one_hits and self.settings.brake_when_futile:
-            braking = self._brake_if_futile(ctx, estimate)
+            braking = self._brake_if_futile(ctx, estimate, plausible_estimate(estimate))
             if braking is not None:
                 self.alpha = 0.0
                 self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, held))
@@ -211,15 +222,17 @@ class LaneRecovery(Supervisor):
         )
         return plan, adopted
 
-    def _brake_if_futile(self, ctx: PlanningContext, estimate: FrictionEstimate) -> Plan | None:
-        """The stop in lane, if an evasion with μ̂ at the posterior's upper 95 % edge also hits.
+    def _brake_if_futile(
+        self, ctx: PlanningContext, estimate: FrictionEstimate, top: FrictionEstimate | None
+    ) -> Plan | None:
+        """The stop in lane, if an evasion planned with ``top`` also hits.
 
         Called when every lane-recovery candidate is predicted to hit an obstacle; ``estimate``
-        is unrelaxed. Returns None (and the planner continues the adopted candidate) when that
-        evasion passes, or when either plan fails.
+        is unrelaxed, ``top`` the most friction it allows (the posterior's upper 95 % edge, or
+        μ̂ itself without a posterior). Returns None (and the planner continues the adopted
+        candidate) when that evasion passes, or when either plan fails.
         """
         memory = self.planner.memory
-        top = plausible_estimate(estimate)
         if top is not None:
             check = ctx.plan(top, "evade")
             gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params,
@@ -229,8 +242,8 @@ class LaneRecovery(Supervisor):
                 if not brake.fallback:
                     self._event(
                         ctx.t_s, EventKind.FUTILE_EVASION,
-                        f"every evasion hits the obstacle, at the posterior's upper 95 % edge too "
-                        f"({gap:.2f} m); braking in lane")
+                        f"every evasion hits the obstacle, with the most friction the estimate "
+                        f"allows too ({gap:.2f} m); braking in lane")
                     return brake
         self.planner.restore(memory)
         return None
