@@ -12,6 +12,7 @@ from mufusion.fusion import (
     FusionData,
     assemble_inputs,
     assemble_inputs_batch,
+    declared_upper_bound,
     local_surface_bound,
 )
 
@@ -207,3 +208,18 @@ def test_batch_assembly_validation():
         assemble_inputs_batch(GRID, pmu, pmu * 0.2, local_mu=0.4)
     with pytest.raises(ValueError, match="predictive_mu"):
         assemble_inputs_batch(GRID, pmu, pmu * 0.2, local_mu=[0.4])
+
+
+def test_declared_upper_bound_is_the_lowest_y_plus_m_at_each_point() -> None:
+    mu, margin = _classes(30.0)
+    d = assemble_inputs(GRID, mu, margin, local_mu=0.925, mode="safe")
+    bound = declared_upper_bound(d, GRID)
+    np.testing.assert_allclose(bound[GRID < 5.0], 0.95)  # the local estimate's 0.925 + 0.025
+    np.testing.assert_allclose(bound[(GRID >= 5.0) & (GRID < 30.0)], 1.0)
+    np.testing.assert_allclose(bound[GRID >= 30.0], 0.6)
+    # Two estimates at one point: the tighter holds; between points the looser neighbour's;
+    # beyond the data nothing.
+    two = FusionData([0.0, 0.0, 2.0], [0.5, 0.3, 0.9], [0.1, 0.1, 0.05])
+    np.testing.assert_allclose(declared_upper_bound(two, np.array([0.0, 1.0, 2.0])),
+                               [0.4, 0.95, 0.95])
+    assert np.isinf(declared_upper_bound(two, np.array([-1.0, 3.0]))).all()

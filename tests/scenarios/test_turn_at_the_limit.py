@@ -152,3 +152,25 @@ def test_a_hard_stop_before_a_hairpin_converges_instead_of_falling_back() -> Non
     assert m.feasibility == "feasible"
     assert not m.minimal_risk and not m.spun and m.fallbacks == 0
     assert not m.left_lane
+
+
+def test_f_safe_relaxes_no_further_than_the_class_the_camera_reports_ahead() -> None:
+    # Truck at 26 m/s, a 150 m curve 20 m ahead, the friction dropping 0.9 → 0.3 5 m into its
+    # arc (feasible by the oracle; GT keeps its lane). F-safe's μ̂ over the drop is the camera's
+    # guaranteed 0.25 − 0.15 = 0.1, and at 26 m/s no plan on it keeps the lane, so lane recovery
+    # relaxes μ̂ towards the posterior mean, which the local estimate on 0.9 holds at 0.9 over the
+    # low class too. Relaxed that far the truck met the drop at 23.9 m/s (the point mass holds
+    # 21 m/s there), spun and ended 16.3 m out of its lane. The relaxation now stops at what the
+    # class declares possible, 0.25 + 0.15 (docs/decisions/0061).
+    cfg = load_scenario("turn", overrides=[
+        "vehicle=truck", "turn.radius_m=150", "turn.angle_rad=1.5708", "initial_speed_mps=26",
+        "duration_s=6", "friction.change_ahead_m=30", "friction.mu_before=0.9",
+        "friction.mu_turn=0.3", "turn.direction=left", "turn.start_ahead_m=20",
+        "turn.clothoid_m=5",
+    ])
+    log = run_scenario(cfg, "F-safe")
+    m = compute_metrics(log)
+    assert m.feasibility == "feasible"
+    low = log.estimates.mu_true < 0.5
+    assert low.any() and (log.estimates.mu_hat[low] <= 0.4 + 1e-9).all()
+    assert not m.minimal_risk and not m.spun and not m.left_lane

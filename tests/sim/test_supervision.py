@@ -22,6 +22,7 @@ from mufusion.sim.supervision import (
     ProbingSettings,
     planned_footprint_violation_m,
     planned_obstacle_clearance_m,
+    planned_obstacle_hit,
     plausible_estimate,
     relaxed_estimate,
 )
@@ -124,13 +125,15 @@ def test_relaxation_never_trusts_the_local_estimate_beyond_its_declared_error() 
     assert full is not None
     # Capped: the mean's 0.92 would over-estimate.
     np.testing.assert_allclose(full.mu_hat[GRID < 30.0], 0.9)
-    np.testing.assert_allclose(full.mu_hat[GRID >= 30.0], 0.7)  # another surface: the mean
+    # Another surface: the mean (0.7), but not above what its class declares possible (0.5 + 0.1).
+    np.testing.assert_allclose(full.mu_hat[GRID >= 30.0], 0.6)
     np.testing.assert_allclose(relaxed_estimate(est, 0.5).mu_hat[GRID < 30.0], 0.75)
-    # Without the local estimate the mean is the target, as before.
+    # Without the local estimate the mean is the target within the classes' declared bounds.
     unmeasured = FrictionEstimate(GRID, np.full(51, 0.6), False, None, fused=post,
                                   data=assemble_inputs(GRID, camera_mu, camera_margin,
                                                        mode="safe"))
-    np.testing.assert_allclose(relaxed_estimate(unmeasured, 1.0).mu_hat, mean)
+    declared = np.where(GRID < 30.0, 1.0, 0.6)
+    np.testing.assert_allclose(relaxed_estimate(unmeasured, 1.0).mu_hat, np.minimum(mean, declared))
     with pytest.raises(ValueError, match=r"probing\.max_decel_mps2"):
         ProbingSettings(max_decel_mps2=9.0)
 
@@ -318,6 +321,45 @@ def test_planned_obstacle_clearance_by_hand() -> None:
     assert planned_obstacle_clearance_m(x, [], TRUCK) == np.inf
 
 
+def _random_plans(rng: np.random.Generator, count: int):
+    """``count`` plans of 41 states over 60 m at random offsets and headings."""
+    for _ in range(count):
+        x = np.zeros((41, 6))
+        x[:, State.s] = np.linspace(0.0, 60.0, 41) + rng.uniform(-1.0, 1.0)
+        x[:, State.d] = rng.uniform(-4.0, 4.0) + rng.normal(0.0, 0.3, 41)
+        x[:, State.dpsi] = rng.normal(0.0, 0.1, 41)
+        yield x
+
+
+def test_planned_obstacle_hit_agrees_with_the_clearance() -> None:
+    # Plans swept past two obstacles at random offsets, some through them, some beside them:
+    # the bounding-box shortcut must answer as the full computation does.
+    from mufusion.planner import PlannerObstacle
+
+    rng = np.random.default_rng(7)
+    obstacles = [PlannerObstacle(s_m=30.0, d_m=0.4, length_m=1.0, width_m=1.5),
+                 PlannerObstacle(s_m=45.0, d_m=-1.0, length_m=4.0, width_m=2.0)]
+    answers = set()
+    for x in _random_plans(rng, 400):
+        hit = planned_obstacle_hit(x, obstacles, TRUCK)
+        assert hit == (planned_obstacle_clearance_m(x, obstacles, TRUCK) < 0.0)
+        answers.add(hit)
+    assert answers == {True, False}
+    # A moving obstacle (one oncoming): row k of the plan meets it where it is k · dt later.
+    moving = [PlannerObstacle(s_m=40.0, d_m=0.0, length_m=4.5, width_m=1.8, speed_mps=-10.0),
+              PlannerObstacle(s_m=20.0, d_m=-1.0, length_m=4.5, width_m=1.8, speed_mps=8.0)]
+    moving_answers = set()
+    for x in _random_plans(rng, 200):
+        hit = planned_obstacle_hit(x, moving, TRUCK, 0.1)
+        assert hit == (planned_obstacle_clearance_m(x, moving, TRUCK, 0.1) < 0.0)
+        moving_answers.add(hit)
+    assert moving_answers == {True, False}
+    x = next(_random_plans(rng, 1))
+    x[:, State.d] = np.nan
+    assert planned_obstacle_hit(x, obstacles, TRUCK) is False
+    assert planned_obstacle_hit(x, [], TRUCK) is False
+
+
 @pytest.mark.slow
 def test_evading_lane_recovery_never_prefers_a_plan_that_hits_the_obstacle() -> None:
     # 24 m/s, obstacle 35 m ahead 1.5 m left of the lane centre, μ 1.0 (the oracle: marginal).
@@ -445,3 +487,43 @@ def test_lane_recovery_holds_its_relaxation_and_gives_it_back_after_the_curve() 
     last = est[est["t_s"] == est["t_s"].max()]
     # Back at the class's lower bound beyond the local estimate's reach (safe mode's guarantee).
     assert float(last[last["s_ahead_m"] == 20.0]["mu_hat"].iloc[0]) == pytest.approx(0.6)
+
+
+def test_relaxation_never_plans_above_the_class_the_camera_reports_ahead() -> None:
+    # The general grid's drop inside a curve (docs/decisions/0061): the local estimate 0.925 ±
+    # 0.025 on μ 0.9, the camera's class 0.25 ± 0.15 from 16 m on. The posterior mean stays at
+    # 0.9 over the low class; relaxing towards it planned the drop at up to 0.9 where every
+    # estimate there says μ ≤ 0.4.
+    camera_mu = np.where(GRID < 16.0, 0.8, 0.25)
+    camera_margin = np.where(GRID < 16.0, 0.2, 0.15)
+    data = assemble_inputs(GRID, camera_mu, camera_margin, local_mu=0.925, mode="safe")
+    post = FusedEstimate(GRID, np.full(51, 0.9), np.full(51, 0.013), np.full(51, 0.87),
+                         np.full(51, 0.87))
+    est = FrictionEstimate(GRID, np.where(GRID < 16.0, 0.6, 0.1), True, 0.925, fused=post,
+                           data=data)
+    full = relaxed_estimate(est, 1.0)
+    assert full is not None
+    np.testing.assert_allclose(full.mu_hat[GRID < 16.0], 0.9)
+    np.testing.assert_allclose(full.mu_hat[GRID >= 16.0], 0.4)
+    np.testing.assert_allclose(relaxed_estimate(est, 0.5).mu_hat[GRID >= 16.0], 0.25)
+
+
+@pytest.mark.slow
+def test_an_evasion_inside_the_road_band_that_hits_turns_into_braking_without_a_posterior() -> None:
+    # The double lane change on snow (μ 0.3): P's camera class bound is 0.1, with which neither
+    # a stop nor an evasion fits in the 31 m. Its evasion stays inside the road band it may use
+    # (so "keeps the lane" said nothing) and is predicted to hit; re-planned once more with its
+    # own μ̂ (it has no posterior to take an upper edge from) it still hits, so it brakes in
+    # lane. Measured: 13.8 m/s impact swerving, 12.3 m/s braking.
+    from pathlib import Path
+
+    file = Path(__file__).parents[2] / "examples" / "roads" / "double_lane_change_snow.toml"
+    setting = ["duration_s=6.0"]
+    braking = run_scenario(load_scenario(str(file), setting), "P")
+    swerving = run_scenario(
+        load_scenario(str(file), [*setting, "lane_recovery.brake_when_futile=false"]), "P")
+    b, s = compute_metrics(braking), compute_metrics(swerving)
+    assert b.collision and s.collision  # with μ̂ 0.1 no plan avoids it
+    assert b.impact_speed_mps < s.impact_speed_mps - 1.0
+    assert not _events(braking, EventKind.FUTILE_EVASION).empty
+    assert _events(swerving, EventKind.FUTILE_EVASION).empty

@@ -24,6 +24,7 @@ from mufusion.fusion.assembly import (
     FusionDataBatch,
     assemble_inputs,
     assemble_inputs_batch,
+    declared_upper_bound,
     local_surface_bound,
 )
 from mufusion.fusion.batch import fuse_batch
@@ -78,6 +79,7 @@ __all__ = [
     "PosteriorEngine",
     "assemble_inputs",
     "assemble_inputs_batch",
+    "declared_upper_bound",
     "fuse",
     "fuse_batch",
     "local_surface_bound",

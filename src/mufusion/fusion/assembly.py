@@ -22,6 +22,7 @@ from mufusion.fusion.data import (
     check_mode,
     check_range,
 )
+from mufusion.fusion.safe import SAME_S_TOL_M, envelope_index
 
 GRID_STEP_M = 1.0
 """Spacing ds of the fusion grid [m] (paper: s ∈ {0, ds, …, s_f}; the authors' code used ≈ 2 m)."""
@@ -300,3 +301,37 @@ def local_surface_bound(data: FusionData, s_eval_m: np.ndarray) -> np.ndarray:
     s_end = float(np.max(data.s_m[surface]))
     out[s_eval <= s_end + 1e-9] = bound
     return out
+
+
+def declared_upper_bound(data: FusionData, s_eval_m: np.ndarray) -> np.ndarray:
+    """The highest μ the estimates' declared errors allow, at ``s_eval_m`` [-].
+
+    Each estimate ``(y, m)`` says ``μ ≤ y + m`` at its position when its error is within its
+    declared margin (the other half of the hard bound ``μ ≥ y − m`` safe mode caps μ̂ with); at a
+    position with several estimates the lowest such bound holds. Strictly between two data
+    positions the larger of the two neighbours' bounds (the surface may change between them and
+    neither estimate rules out the other's); outside the data nothing is declared: ``+inf``.
+
+    What a departure from the guaranteed μ̂ (lane recovery) may assume at most: planning above it
+    plans with a friction every estimate there declares impossible (docs/decisions/0061).
+
+    Examples
+    --------
+    >>> d = FusionData([0.0, 1.0, 2.0], [0.9, 0.25, 0.25], [0.025, 0.15, 0.15])
+    >>> declared_upper_bound(d, np.array([0.0, 0.5, 2.0, 3.0])).round(3).tolist()
+    [0.925, 0.925, 0.4, inf]
+    """
+    s_eval = np.asarray(s_eval_m, dtype=float)
+    if data.s_m.size == 0:
+        return np.full(s_eval.shape, np.inf)
+    hi = data.mu + data.margin
+    order = np.lexsort((hi, data.s_m))  # by s, then the lowest bound first
+    s_sorted, hi_sorted = data.s_m[order], hi[order]
+    first = np.ones(s_sorted.size, dtype=bool)
+    first[1:] = np.diff(s_sorted) > SAME_S_TOL_M
+    us, ub = s_sorted[first], hi_sorted[first]
+    left, right, at_left, at_right, outside = envelope_index(us, s_eval)
+    bound = np.maximum(ub[left], ub[right])
+    bound = np.where(at_right, ub[right], bound)
+    bound = np.where(at_left, ub[left], bound)
+    return np.where(outside, np.inf, bound)

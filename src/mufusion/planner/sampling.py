@@ -277,10 +277,20 @@ def candidate_rollouts(
                 "lacks (reinstall with `pip install -e .`)"
             ) from exc
 
-        def stiffness_of(rear_load_n: np.ndarray, mu: np.ndarray) -> np.ndarray:
-            return rear_cornering_stiffness_n_per_rad(
-                params, rear_load_n, utilization_factor, mu_hat=mu, table=stiffness_table
-            )
+        stiffness_of: Callable[[np.ndarray, np.ndarray], np.ndarray]
+        if stiffness_table is None:
+            # The vehicle's tire: the stiffness is its load times a factor that μ̂ does not
+            # change, computed once here instead of at each of the 40 steps (factor · 1 = the
+            # factor, so each step's product is the one the full call makes).
+            per_load = rear_cornering_stiffness_n_per_rad(params, 1.0, utilization_factor)
+
+            def stiffness_of(rear_load_n: np.ndarray, mu: np.ndarray) -> np.ndarray:
+                return per_load * rear_load_n
+        else:
+            def stiffness_of(rear_load_n: np.ndarray, mu: np.ndarray) -> np.ndarray:
+                return rear_cornering_stiffness_n_per_rad(
+                    params, rear_load_n, utilization_factor, mu_hat=mu, table=stiffness_table
+                )
 
         rollouts(
             xs, us, np.ascontiguousarray(d_t, dtype=float),

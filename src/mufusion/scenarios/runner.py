@@ -180,7 +180,8 @@ def build_loop(
     )
     plant = Plant(params, initial_state(params, x0_x, x0_y, x0_psi, cfg.initial_speed_mps),
                   dt_s=1.0 / rates.plant_hz, surface_tires=cfg.sim.surface_tires(),
-                  slip_control=cfg.sim.slip_control())
+                  slip_control=cfg.sim.slip_control(),
+                  stability_control=cfg.sim.stability_control())
     return ClosedLoop(
         world=world,
         params=params,

@@ -12,6 +12,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from mufusion.estimators import ErrorModel
 from mufusion.planner.ocp import PlannerConfig
 from mufusion.vehicle.slip_control import SlipControlSettings
+from mufusion.vehicle.stability_control import StabilityControlSettings
 from mufusion.vehicle.surface_tires import (
     AUTHORS_TIRES,
     AUTHORS_TIRES_INTERPOLATED,
@@ -185,6 +186,10 @@ class SimSettings(_Strict):
     production car and truck; ``false`` shows what it does."""
     tcs: bool = True
     """Traction control in the vehicle (the same controller on drive torque)."""
+    esc: bool = False
+    """Yaw stability control in the vehicle (:mod:`mufusion.vehicle.stability_control`): a yaw
+    moment from braking one front wheel when the vehicle rotates faster than its steering asks.
+    Off by default (docs/decisions/0061)."""
 
     def surface_tires(self) -> SurfaceTireTable | None:
         """The plant's tire table (``None`` for the default tire)."""
@@ -195,6 +200,11 @@ class SimSettings(_Strict):
         if not (self.abs or self.tcs):
             return None
         return SlipControlSettings(abs_enabled=self.abs, tcs_enabled=self.tcs)
+
+
+    def stability_control(self) -> StabilityControlSettings | None:
+        """The vehicle's yaw stability control (``None`` with ``esc`` off)."""
+        return StabilityControlSettings() if self.esc else None
 
 
 class InitialPerturbation(_Strict):

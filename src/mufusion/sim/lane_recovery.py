@@ -20,8 +20,10 @@ from mufusion.sim.settings import LaneRecoverySettings
 from mufusion.sim.supervision import (
     planned_footprint_violation_m,
     planned_obstacle_clearance_m,
+    planned_obstacle_hit,
     plausible_estimate,
-    relaxed_estimate,
+    relaxation_gain,
+    relaxed_by,
 )
 from mufusion.sim.supervisor import PlanningContext, Supervisor
 from mufusion.vehicle.params import VehicleParams
@@ -92,6 +94,14 @@ class LaneRecovery(Supervisor):
         """The relaxation adopted at the last step, held into the next (0: none)."""
         self.recoveries: list[Recovery] = []
         """Each step's outcome where lane recovery acted, in order."""
+        self._gain: tuple[FrictionEstimate, np.ndarray | None] | None = None
+
+    def _relaxed(self, estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
+        """:func:`~mufusion.sim.supervision.relaxed_estimate`, with the gain computed once per
+        estimate (a planning step relaxes the same one by up to five fractions)."""
+        if self._gain is None or self._gain[0] is not estimate:
+            self._gain = (estimate, relaxation_gain(estimate))
+        return relaxed_by(estimate, self._gain[1], alpha)
 
     def adjust_inputs(
         self, ctx: PlanningContext, mode: PlanningMode, estimate: FrictionEstimate
@@ -100,7 +110,7 @@ class LaneRecovery(Supervisor):
         if not self.settings.enabled or ctx.minimal_risk or mode == "evade":
             return estimate
         if self.alpha > 0.0:
-            relaxed = relaxed_estimate(estimate, self.alpha)
+            relaxed = self._relaxed(estimate, self.alpha)
             if relaxed is not None:
                 return relaxed
         self.alpha = 0.0
@@ -123,26 +133,37 @@ class LaneRecovery(Supervisor):
         if not hold:
             self.alpha = 0.0
         held = self.alpha
+        # An evasion predicted to hit an obstacle is reviewed even where it keeps to the band
+        # it may use (the road, evading): "keeps the lane" says nothing about the obstacle.
+        futile = (mode == "evade" and self.settings.brake_when_futile and not plan.fallback
+                  and planned_obstacle_hit(plan.states, ctx.obstacles, self.params, plan.dt_s))
         # Without a posterior (GT, L, P) there is nothing to relax: skip the footprint check,
-        # which would run at every planning step.
-        if relaxed_estimate(estimate, 1.0) is None:
+        # which would run at every planning step. Their μ̂ has no upper edge to check an evasion
+        # against: the check re-plans the evasion with μ̂ itself (one more iteration, so that a
+        # plan still converging is not taken for a futile one).
+        if self._relaxed(estimate, 1.0) is None:
             self.alpha = 0.0
+            if futile:
+                braking = self._brake_if_futile(ctx, estimate, estimate)
+                if braking is not None:
+                    self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, 0.0))
+                    return braking, estimate
             return plan, estimate
-        planned_with = relaxed_estimate(estimate, held) if held > 0.0 else estimate
+        planned_with = self._relaxed(estimate, held) if held > 0.0 else estimate
         assert planned_with is not None
         tolerance = self.settings.violation_tolerance_m
         before = self.footprint_violation_m(plan)
         alphas = (0.0, *self.settings.steps)
         t = ctx.t_s
         # No friction-limited plan at all (the solve failed) counts as not keeping the lane.
-        if before <= tolerance and not plan.fallback:
+        if before <= tolerance and not plan.fallback and not futile:
             if held == 0.0:
                 return plan, estimate
             # The lane is kept with the relaxation held: try one step less of it, so that the
             # guarantee of the lower bound returns as soon as the lane allows.
             lower = alphas[alphas.index(held) - 1]
             memory = self.planner.memory
-            candidate_estimate = relaxed_estimate(estimate, lower) if lower > 0.0 else estimate
+            candidate_estimate = self._relaxed(estimate, lower) if lower > 0.0 else estimate
             assert candidate_estimate is not None
             candidate = ctx.plan(candidate_estimate, mode)
             if not candidate.fallback and self.footprint_violation_m(candidate) <= tolerance:
@@ -162,13 +183,13 @@ class LaneRecovery(Supervisor):
         # A plan predicted to hit an obstacle is never preferred to one predicted to pass it,
         # however much further the latter leaves the lane (evading, the road band).
         def rank(candidate: Plan, violation: float) -> tuple[bool, float]:
-            hits = planned_obstacle_clearance_m(
-                candidate.states, ctx.obstacles, self.params, candidate.dt_s) < 0.0
+            hits = planned_obstacle_hit(candidate.states, ctx.obstacles, self.params,
+                                        candidate.dt_s)
             return (hits, np.inf if candidate.fallback else violation)
 
         best = (rank(plan, before), before, plan, planned_with, held, self.planner.memory)
         for alpha in (a for a in alphas if a > held):
-            relaxed = relaxed_estimate(estimate, alpha)
+            relaxed = self._relaxed(estimate, alpha)
             assert relaxed is not None
             candidate = ctx.plan(relaxed, mode)
             violation = self.footprint_violation_m(candidate)
@@ -180,7 +201,7 @@ class LaneRecovery(Supervisor):
         (every_one_hits, _), violation, plan, adopted, alpha, memory = best
         self.planner.restore(memory)
         if mode == "evade" and every_one_hits and self.settings.brake_when_futile:
-            braking = self._brake_if_futile(ctx, estimate)
+            braking = self._brake_if_futile(ctx, estimate, plausible_estimate(estimate))
             if braking is not None:
                 self.alpha = 0.0
                 self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, held))
@@ -201,15 +222,17 @@ class LaneRecovery(Supervisor):
         )
         return plan, adopted
 
-    def _brake_if_futile(self, ctx: PlanningContext, estimate: FrictionEstimate) -> Plan | None:
-        """The stop in lane, if an evasion with μ̂ at the posterior's upper 95 % edge also hits.
+    def _brake_if_futile(
+        self, ctx: PlanningContext, estimate: FrictionEstimate, top: FrictionEstimate | None
+    ) -> Plan | None:
+        """The stop in lane, if an evasion planned with ``top`` also hits.
 
         Called when every lane-recovery candidate is predicted to hit an obstacle; ``estimate``
-        is unrelaxed. Returns None (and the planner continues the adopted candidate) when that
-        evasion passes, or when either plan fails.
+        is unrelaxed, ``top`` the most friction it allows (the posterior's upper 95 % edge, or
+        μ̂ itself without a posterior). Returns None (and the planner continues the adopted
+        candidate) when that evasion passes, or when either plan fails.
         """
         memory = self.planner.memory
-        top = plausible_estimate(estimate)
         if top is not None:
             check = ctx.plan(top, "evade")
             gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params,
@@ -219,8 +242,8 @@ class LaneRecovery(Supervisor):
                 if not brake.fallback:
                     self._event(
                         ctx.t_s, EventKind.FUTILE_EVASION,
-                        f"every evasion hits the obstacle, at the posterior's upper 95 % edge too "
-                        f"({gap:.2f} m); braking in lane")
+                        f"every evasion hits the obstacle, with the most friction the estimate "
+                        f"allows too ({gap:.2f} m); braking in lane")
                     return brake
         self.planner.restore(memory)
         return None

@@ -27,7 +27,9 @@ only with a posterior (F, F-safe). The target is the posterior mean, but never a
 local estimate guarantees on the surface it measured (``μ_l − m_l``, carried over the camera's
 class under the vehicle; :func:`mufusion.fusion.local_surface_bound`): the mean follows the
 local value itself, and trusting that beyond its declared error over-estimated by up to ``m_l``
-(docs/decisions/0043, "Lane recovery trusts a measurement within its declared error").
+(docs/decisions/0043, "Lane recovery trusts a measurement within its declared error"), and
+nowhere above what the estimates there declare possible (``y + m``: the mean can sit far above
+the class the camera reports ahead; docs/decisions/0061).
 The ``α`` adopted is held: the next step plans with it first and searches upwards from it if
 that plan leaves the lane; if it keeps the lane, one step less is tried, and adopted if it keeps
 the lane too. Without the hold each step started from the
@@ -65,7 +67,9 @@ predicted to pass it. When every candidate hits, one more plan is made with μ̂
 of the posterior's 95 % band (:func:`plausible_estimate`), as a check only: if it hits too, no
 evasion the posterior allows passes the obstacle, and the vehicle brakes in lane with the
 unrelaxed μ̂ (the planner's emergency mode) to lower the impact speed, logged as
-``futile_evasion``. The check is made afresh at each planning step.
+``futile_evasion``. The check is made afresh at each planning step. An evasion inside the band it
+may use (the road) that is predicted to hit is reviewed the same way; without a posterior (GT, L,
+P) the check re-plans the evasion with μ̂ itself (docs/decisions/0062).
 
 The loop runs them as its supervisors (:class:`~mufusion.sim.supervisor.Supervisor`):
 :class:`~mufusion.sim.stop_in_lane.StopInLane`, :class:`~mufusion.sim.lane_recovery.LaneRecovery`
@@ -83,9 +87,9 @@ from enum import StrEnum
 import numpy as np
 
 from mufusion.configurations import MU_HAT_MAX, FrictionEstimate
-from mufusion.fusion import Z95, local_surface_bound
+from mufusion.fusion import Z95, declared_upper_bound, local_surface_bound
 from mufusion.planner import PlannerObstacle
-from mufusion.road.geometry import rectangle_corners, signed_clearance_m
+from mufusion.road.geometry import rectangle_corners, rectangles_overlap, signed_clearance_m
 
 # The settings live apart (the scenario schema reads them); importers of this module keep them.
 from mufusion.sim.settings import LaneRecoverySettings as LaneRecoverySettings
@@ -176,13 +180,67 @@ def planned_obstacle_clearance_m(
     ahead = params.body_centre_ahead_of_cog_m
     ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
                             params.length_m, params.width_m)
-    times_s = dt_s * np.arange(len(s), dtype=float)
-    return min(
-        float(np.min(signed_clearance_m(ego, rectangle_corners(
-            ob.s_m + ob.speed_mps * times_s if ob.speed_mps else ob.s_m, ob.d_m, 0.0,
-            ob.length_m, ob.width_m))))
-        for ob in obstacles
-    )
+    return min(float(np.min(signed_clearance_m(ego, box)))
+               for box in _obstacle_corners(obstacles, len(s), dt_s))
+
+
+def _obstacle_corners(
+    obstacles: Sequence[PlannerObstacle], rows: int, dt_s: float
+) -> list[np.ndarray]:
+    """Each obstacle's corners in ``(s, d)``: ``(4, 2)``, or ``(rows, 4, 2)`` for a moving one,
+    row ``k`` where it is ``k · dt_s`` after the first."""
+    times_s = dt_s * np.arange(rows, dtype=float)
+    return [rectangle_corners(ob.s_m + ob.speed_mps * times_s if ob.speed_mps else ob.s_m,
+                              ob.d_m, 0.0, ob.length_m, ob.width_m)
+            for ob in obstacles]
+
+
+def planned_obstacle_hit(
+    states: np.ndarray,
+    obstacles: Sequence[PlannerObstacle],
+    params: VehicleParams,
+    dt_s: float = 0.0,
+) -> bool:
+    """Whether a plan's predicted footprints overlap an obstacle: the same answer as
+    ``planned_obstacle_clearance_m(states, obstacles, params, dt_s) < 0.0``, at a fraction of
+    its cost.
+
+    Only where a footprint's bounding box overlaps an obstacle's (the obstacles are axis-aligned
+    in ``(s, d)``) can the rectangles overlap: the separating-axis test of
+    :func:`~mufusion.road.geometry.signed_clearance_m` projects onto the obstacle's edge normals,
+    the coordinate axes, and these projections are the boxes' extents bit for bit, so where the
+    boxes do not overlap its penetration is ≤ 0 and the clearance the distance, ≥ 0. The other
+    states are judged by that penetration itself
+    (:func:`~mufusion.road.geometry.rectangles_overlap`: the clearance is negative exactly where
+    it is positive). Non-finite input takes the full computation.
+
+    Examples
+    --------
+    >>> from mufusion.planner import PlannerObstacle
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> x = np.zeros((2, 6)); x[:, State.s] = [0.0, 20.0]
+    >>> planned_obstacle_hit(x, [PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)],
+    ...                      TRUCK)
+    True
+    """
+    if not obstacles:
+        return False
+    x = np.asarray(states, dtype=float)
+    boxes = _obstacle_corners(obstacles, len(x), dt_s)
+    if not (np.all(np.isfinite(x)) and all(np.all(np.isfinite(box)) for box in boxes)):
+        return planned_obstacle_clearance_m(x, obstacles, params, dt_s) < 0.0
+    s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
+    ahead = params.body_centre_ahead_of_cog_m
+    ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
+                            params.length_m, params.width_m)
+    ego_lo, ego_hi = ego.min(axis=-2), ego.max(axis=-2)
+    for box in boxes:
+        overlap = np.minimum(ego_hi, box.max(axis=-2)) - np.maximum(ego_lo, box.min(axis=-2))
+        near = np.all(overlap > 0.0, axis=-1)
+        if np.any(near) and bool(np.any(
+                rectangles_overlap(ego[near], box[near] if box.ndim == 3 else box))):
+            return True
+    return False
 
 
 def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
@@ -190,8 +248,12 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     a posterior or when the mean adds nothing.
 
     The target is the mean capped, where the data hold a local estimate, by what it guarantees
-    on the surface it measured (:func:`mufusion.fusion.local_surface_bound`); beyond that
-    surface, and without a local estimate, it is the mean.
+    on the surface it measured (:func:`mufusion.fusion.local_surface_bound`), and everywhere by
+    the highest friction the estimates' declared errors allow
+    (:func:`mufusion.fusion.declared_upper_bound`, ``y + m``): the posterior mean can lie far
+    above a class the camera reports ahead (0.9 over a class of 0.25 ± 0.15 once the local
+    estimate on 0.9 anchors it), and plans relaxed to it reached a drop too fast
+    (docs/decisions/0061). Without data the target is the mean.
 
     Examples
     --------
@@ -202,16 +264,35 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     >>> np.round(relaxed_estimate(est, 0.5).mu_hat, 6).tolist()
     [0.3, 0.4]
     """
+    return relaxed_by(estimate, relaxation_gain(estimate), alpha)
+
+
+def relaxation_gain(estimate: FrictionEstimate) -> np.ndarray | None:
+    """How far :func:`relaxed_estimate` moves μ̂ at ``alpha = 1``: the target less μ̂, never
+    negative; None without a posterior or when the mean adds nothing. A caller that relaxes one
+    estimate by several fractions computes it once (:func:`relaxed_by`)."""
     if estimate.fused is None:
         return None
     mu_hat = np.asarray(estimate.mu_hat, dtype=float)
     target = np.asarray(estimate.fused.mean, dtype=float)
     if estimate.data is not None:
-        target = np.minimum(target, local_surface_bound(estimate.data, estimate.s_m))
+        target = np.minimum(np.minimum(target, local_surface_bound(estimate.data, estimate.s_m)),
+                            declared_upper_bound(estimate.data, estimate.s_m))
     gain = np.maximum(target - mu_hat, 0.0)
     if not np.any(gain > 1e-9):
         return None
-    return dataclasses.replace(estimate, mu_hat=mu_hat + alpha * gain)
+    return gain
+
+
+def relaxed_by(
+    estimate: FrictionEstimate, gain: np.ndarray | None, alpha: float
+) -> FrictionEstimate | None:
+    """``estimate`` with μ̂ raised by ``alpha`` times its :func:`relaxation_gain` ``gain``
+    (None for a gain of None): :func:`relaxed_estimate` without computing the gain again."""
+    if gain is None:
+        return None
+    return dataclasses.replace(
+        estimate, mu_hat=np.asarray(estimate.mu_hat, dtype=float) + alpha * gain)
 
 
 def plausible_estimate(estimate: FrictionEstimate) -> FrictionEstimate | None:

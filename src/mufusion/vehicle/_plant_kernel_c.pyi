@@ -1,5 +1,5 @@
 from mufusion.vehicle.params import TireParams
-from mufusion.vehicle.plant_kernel import AxleFloats, PlantKernel, StepResult
+from mufusion.vehicle.plant_kernel import AxleFloats, Command, PlantKernel, StepResult
 
 class CompiledPlantKernel:
     def __init__(
@@ -10,7 +10,7 @@ class CompiledPlantKernel:
         chassis0: tuple[float, ...],
         omega_f0: float,
         omega_r0: float,
-        command: tuple[float, float, float],
+        command: Command,
         mu_f: float,
         mu_r: float,
         tire_f: TireParams,

@@ -238,9 +238,9 @@ cdef class CompiledPlantKernel:
         out[0] = vx * cos_p - vy * sin_p
         out[1] = vx * sin_p + vy * cos_p
         out[2] = yaw_rate
-        out[3] = (fx_front_body + rear.fx) / m + vy * yaw_rate
+        out[3] = (fx_front_body + rear.fx + command[4]) / m + vy * yaw_rate
         out[4] = (fy_front_body + rear.fy) / m - vx * yaw_rate
-        out[5] = (self.lf * fy_front_body - self.lr * rear.fy) / self.yaw_inertia
+        out[5] = (self.lf * fy_front_body - self.lr * rear.fy + command[3]) / self.yaw_inertia
         out[6] = steer_rate
         out[7] = (command[1] - torque_f) / self.torque_tau
         out[8] = (command[2] - torque_r) / self.torque_tau
@@ -309,7 +309,7 @@ cdef class CompiledPlantKernel:
             self._tire_r = tire_struct(tire_r)
             self._tire_r_obj = tire_r
         cdef double x0[9]
-        cdef double cmd[3]
+        cdef double cmd[5]
         cdef double k1[9]
         cdef double k2[9]
         cdef double k3[9]
@@ -320,6 +320,9 @@ cdef class CompiledPlantKernel:
             x0[i] = chassis0[i]
         for i in range(3):
             cmd[i] = command[i]
+        # The stability control's yaw moment and braking force, if given (plant_kernel.Command).
+        cmd[3] = command[3] if len(command) > 3 else 0.0
+        cmd[4] = command[4] if len(command) > 3 else 0.0
         cdef double dt = self.dt, radius = self.radius
         cdef Axle front, rear
         cdef Speeds sp0 = self.wheel_speeds(x0[3], x0[4], x0[5], x0[6])

@@ -50,6 +50,10 @@ from mufusion.vehicle.slip_control import (
     SlipControlSettings,
     WheelSlipController,
 )
+from mufusion.vehicle.stability_control import (
+    StabilityControlSettings,
+    YawStabilityController,
+)
 from mufusion.vehicle.surface_tires import SurfaceTireTable, tire_for_surface
 
 __all__ = [
@@ -226,6 +230,11 @@ class Plant:
         ``None`` (default): the torque commands reach the wheels as they are. Settings: a
         :class:`~mufusion.vehicle.slip_control.WheelSlipController` (ABS, TCS) modulates them
         at every step, as on a production vehicle; its status is in ``PlantOutput.slip_control``.
+    stability_control
+        ``None`` (default): no yaw stability control. Settings: a
+        :class:`~mufusion.vehicle.stability_control.YawStabilityController` (ESC) adds a yaw
+        moment from braking one front wheel when the vehicle rotates faster than its steering
+        asks (``Plant.stability_control_active_s`` sums how long it acted).
 
     Raises
     ------
@@ -256,6 +265,7 @@ class Plant:
         surface_tires: SurfaceTireTable | None = None,
         kernel: str = "auto",
         slip_control: SlipControlSettings | None = None,
+        stability_control: StabilityControlSettings | None = None,
     ) -> None:
         if not (0.0 < dt_s <= DEFAULT_DT_S + 1e-12):
             raise ValueError(f"dt_s must be in (0, {DEFAULT_DT_S}] s, got {dt_s!r}")
@@ -276,7 +286,14 @@ class Plant:
         self._slip_control = None if slip_control is None else WheelSlipController(
             params, slip_control, self.dt_s, float(self._x.vx_mps)
         )
+        if stability_control is not None and not isinstance(
+                stability_control, StabilityControlSettings):
+            raise ValueError("stability_control must be StabilityControlSettings or None, "
+                             f"got {type(stability_control)!r}")
+        self._esc = None if stability_control is None else YawStabilityController(
+            params, stability_control)
         self._accel_x_mps2 = 0.0  # the last step's longitudinal acceleration (the IMU's)
+        self._accel_y_mps2 = 0.0  # and lateral
         # (μ_f, μ_r, tire_f, tire_r, axles) of the latest output, reused by the next step's
         # first stage.
         self._last_axles: (
@@ -292,6 +309,11 @@ class Plant:
     def state(self) -> PlantStateVector:
         """Current state as named floats."""
         return self._x
+
+    @property
+    def stability_control_active_s(self) -> float:
+        """How long the yaw stability control has acted so far [s] (0 without it)."""
+        return 0.0 if self._esc is None else self._esc.active_s
 
     def step(
         self, command: ActuatorCommand | np.ndarray, mu_front: float, mu_rear: float
@@ -326,6 +348,15 @@ class Plant:
                 cmd, omega_f0, omega_r0, self._accel_x_mps2, x0.torque_front_nm,
                 x0.torque_rear_nm, self.time_s,
             )
+        kernel_cmd: tuple[float, ...] = cmd
+        force_x = 0.0
+        if self._esc is not None:
+            yaw_moment, force_x = self._esc.moment(
+                math.hypot(x0.vx_mps, x0.vy_mps), x0.yaw_rate_radps, x0.steer_rad,
+                self._accel_y_mps2, mu_front)
+            if yaw_moment != 0.0:
+                self._esc.active_s += self.dt_s
+                kernel_cmd = (*cmd, yaw_moment, force_x)
         # The surface under each axle is held over the step (μ is too).
         tire_f = tire_for_surface(mu_front, p.tire, self.surface_tires)
         tire_r = tire_for_surface(mu_rear, p.tire, self.surface_tires)
@@ -339,7 +370,8 @@ class Plant:
         ):
             first = last[4]
         values, axles, cos_d, sin_d = self._kernel.step(
-            x0[:6] + x0[8:], omega_f0, omega_r0, cmd, mu_front, mu_rear, tire_f, tire_r, first
+            x0[:6] + x0[8:], omega_f0, omega_r0, kernel_cmd, mu_front, mu_rear, tire_f, tire_r,
+            first,
         )
         x1 = PlantStateVector._make(values)
         self._x = x1
@@ -350,14 +382,15 @@ class Plant:
         )
         front, rear = AxleOutput(*axles[0], mu_front), AxleOutput(*axles[1], mu_rear)
         m = p.mass_kg
-        accel_x = (front.fx_n * cos_d - front.fy_n * sin_d + rear.fx_n) / m
-        self._accel_x_mps2 = accel_x
+        accel_x = (front.fx_n * cos_d - front.fy_n * sin_d + rear.fx_n + force_x) / m
+        accel_y = (front.fx_n * sin_d + front.fy_n * cos_d + rear.fy_n) / m
+        self._accel_x_mps2, self._accel_y_mps2 = accel_x, accel_y
         return PlantOutput(
             x=np.asarray(x1),
             time_s=self.time_s,
             front=front,
             rear=rear,
             accel_x_mps2=accel_x,
-            accel_y_mps2=(front.fx_n * sin_d + front.fy_n * cos_d + rear.fy_n) / m,
+            accel_y_mps2=accel_y,
             slip_control=slip_status,
         )

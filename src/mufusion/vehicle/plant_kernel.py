@@ -40,6 +40,12 @@ KERNEL_KINDS: tuple[str, ...] = get_args(KernelKind)
 # the steering angle's cosine and sine there.
 StepResult = tuple[tuple[float, ...], tuple[AxleFloats, AxleFloats], float, float]
 
+# The actuators' command ``(steer_rad, torque_front_nm, torque_rear_nm)``, optionally followed by
+# the stability control's ``(yaw_moment_nm, force_x_n)``: the direct yaw moment and the
+# longitudinal body force of the wheel it brakes (single-track representation of differential
+# braking; :mod:`mufusion.vehicle.stability_control`). Three floats: no such moment.
+Command = tuple[float, ...]
+
 
 class Kernel(Protocol):
     """What :class:`~mufusion.vehicle.plant.Plant` needs of a kernel (either implementation)."""
@@ -49,7 +55,7 @@ class Kernel(Protocol):
         chassis0: tuple[float, ...],
         omega_f0: float,
         omega_r0: float,
-        command: tuple[float, float, float],
+        command: Command,
         mu_f: float,
         mu_r: float,
         tire_f: TireParams,
@@ -201,7 +207,7 @@ class PlantKernel:
     def rates(
         self, psi: float, vx: float, vy: float, yaw_rate: float, steer: float, torque_f: float,
         torque_r: float, cos_d: float, sin_d: float, front: AxleFloats, rear: AxleFloats,
-        command: tuple[float, float, float],
+        command: Command,
     ) -> tuple[float, ...]:
         """``plant._chassis_rates`` of a chassis state, without the wheel-spin rates."""
         fx_f, fy_f, fx_r, fy_r = front[0], front[1], rear[0], rear[1]
@@ -209,7 +215,8 @@ class PlantKernel:
         fy_front_body = fx_f * sin_d + fy_f * cos_d
         m = self.mass
         cos_p, sin_p = _cos(psi), _sin(psi)
-        steer_cmd, torque_f_cmd, torque_r_cmd = command
+        steer_cmd, torque_f_cmd, torque_r_cmd = command[0], command[1], command[2]
+        yaw_moment, force_x = (command[3], command[4]) if len(command) > 3 else (0.0, 0.0)
         max_rate = self.max_steer_rate
         steer_rate = (steer_cmd - steer) / self.steer_tau
         # min(max(rate, -max_rate), max_rate)
@@ -222,9 +229,9 @@ class PlantKernel:
             vx * cos_p - vy * sin_p,
             vx * sin_p + vy * cos_p,
             yaw_rate,
-            (fx_front_body + fx_r) / m + vy * yaw_rate,
+            (fx_front_body + fx_r + force_x) / m + vy * yaw_rate,
             (fy_front_body + fy_r) / m - vx * yaw_rate,
-            (self.lf * fy_front_body - self.lr * fy_r) / self.yaw_inertia,
+            (self.lf * fy_front_body - self.lr * fy_r + yaw_moment) / self.yaw_inertia,
             steer_rate,
             (torque_f_cmd - torque_f) / torque_tau,
             (torque_r_cmd - torque_r) / torque_tau,
@@ -235,7 +242,7 @@ class PlantKernel:
         chassis0: tuple[float, ...],
         omega_f0: float,
         omega_r0: float,
-        command: tuple[float, float, float],
+        command: Command,
         mu_f: float,
         mu_r: float,
         tire_f: TireParams,
@@ -332,7 +339,7 @@ class PlantKernel:
         chassis0: tuple[float, ...],
         omega_f0: float,
         omega_r0: float,
-        command: tuple[float, float, float],
+        command: Command,
         mu_f: float,
         mu_r: float,
         tire_f: TireParams,

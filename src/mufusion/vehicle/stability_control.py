@@ -1,0 +1,115 @@
+"""Yaw stability control (ESC) in the vehicle: a yaw moment from braking one front wheel.
+
+Production ESC compares the measured yaw rate with the one the driver's steering asks for and,
+when the vehicle turns faster (oversteer), brakes the outer front wheel: the braking force acts
+half a track off the centre line and turns the vehicle back (van Zanten, "Bosch ESP systems: 5
+years of experience", SAE 2000-01-1633; Rajamani, *Vehicle Dynamics and Control*, ch. 8). The
+plant is single-track, so the braking appears as it does in single-track ESC models: a direct yaw
+moment ``M_z`` about the centre of gravity and the longitudinal force ``|M_z| / (t/2)`` of the
+braked wheel. That wheel can deliver at most its friction, ``μ F_z,wheel`` (its ABS keeps it near
+the peak), which bounds the moment; its lost lateral force is not represented.
+
+Two yaw rates explain a vehicle's rotation: the single-track steady state for the measured
+steering angle and speed, ``v δ / L`` (both presets' tires have the same stiffness per unit load
+front and rear, so the understeer gradient is zero), and the rate at which the velocity vector
+turns, ``a_y / v`` (in cornering ``ψ̇ = a_y / v − β̇``: a yaw rate beyond it is the body slip
+growing, the vehicle rotating rather than cornering). Oversteer is a yaw rate beyond both (each
+counted in the direction of the rotation); the controller acts when that excess passes a
+deadband, with the moment that would remove it within ``response_time_s``:
+``M_z = −sign(ψ̇) I_z · excess / τ``, bounded as above. Acting on the steering's rate alone
+braked trucks that corner with little steering at speed (docs/decisions/0061). It reads the
+vehicle's own signals only (yaw-rate sensor, steering angle, wheel-speed/IMU speed and lateral
+acceleration); the bound is the physics of the braked wheel, not something the controller knows.
+
+Off by default (``sim.esc``): docs/decisions/0061 measured it on the general grid's failures.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+from mufusion.vehicle.params import VehicleParams
+
+GRAVITY_MPS2 = 9.81
+
+
+@dataclass(frozen=True)
+class StabilityControlSettings:
+    """ESC thresholds (SI units).
+
+    Attributes
+    ----------
+    yaw_rate_deadband_radps
+        Excess of the yaw rate over what explains it before the controller acts [rad/s], ≥ 0
+        (production activation thresholds are a few degrees per second).
+    response_time_s
+        Time in which the moment would remove the excess [s], > 0 (a brake's build-up time).
+    min_speed_mps
+        Below this speed the controller is passive [m/s], ≥ 0.
+    """
+
+    yaw_rate_deadband_radps: float = 0.05
+    response_time_s: float = 0.2
+    min_speed_mps: float = 3.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool) or not (
+                isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0
+            ):
+                raise ValueError(f"{f.name} must be a finite number >= 0, got {value!r}")
+        if not self.response_time_s > 0.0:
+            raise ValueError(f"response_time_s must be > 0 s, got {self.response_time_s!r}")
+
+
+class YawStabilityController:
+    """The ESC of one vehicle (see the module docstring).
+
+    Examples
+    --------
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> esc = YawStabilityController(TRUCK, StabilityControlSettings())
+    >>> esc.moment(15.0, 0.2, 3.4 * 0.2 / 15.0, 3.0, 0.9)  # turning as the steering asks
+    (0.0, 0.0)
+    >>> mz, fx = esc.moment(15.0, -0.6, -0.09, -6.0, 0.9)  # a right turn rotating too fast
+    >>> mz > 0.0 > fx
+    True
+    """
+
+    def __init__(self, params: VehicleParams, settings: StabilityControlSettings) -> None:
+        self.params, self.settings = params, settings
+        wheelbase = params.cog_to_front_axle_m + params.cog_to_rear_axle_m
+        self._wheelbase_m = wheelbase
+        self._half_track_m = 0.5 * params.track_width_m
+        # Static load on one front wheel [N].
+        self._front_wheel_load_n = (
+            0.5 * params.mass_kg * GRAVITY_MPS2 * params.cog_to_rear_axle_m / wheelbase)
+        self.active_s = 0.0
+        """How long the controller has acted so far [s] (summed over the steps it acted in)."""
+
+    def moment(
+        self, speed_mps: float, yaw_rate_radps: float, steer_rad: float, accel_y_mps2: float,
+        mu_front: float,
+    ) -> tuple[float, float]:
+        """``(yaw_moment_nm, force_x_n)`` for the coming plant step (zeros when passive).
+
+        ``mu_front`` is the road's friction under the front wheels: it bounds what the braked
+        wheel delivers (the plant's physics, not a signal the controller reads).
+        """
+        cfg = self.settings
+        if not speed_mps > cfg.min_speed_mps:
+            return 0.0, 0.0
+        explained = 0.0
+        for rate in (speed_mps * steer_rad / self._wheelbase_m, accel_y_mps2 / speed_mps):
+            if rate * yaw_rate_radps > 0.0:  # a rate in the rotation's direction explains it
+                explained = max(explained, abs(rate))
+        excess = abs(yaw_rate_radps) - explained
+        if not excess > cfg.yaw_rate_deadband_radps:
+            return 0.0, 0.0
+        moment = -math.copysign(
+            self.params.yaw_inertia_kgm2 * excess / cfg.response_time_s, yaw_rate_radps)
+        cap = mu_front * self._front_wheel_load_n * self._half_track_m
+        moment = min(max(moment, -cap), cap)
+        return moment, -abs(moment) / self._half_track_m

@@ -1,0 +1,68 @@
+"""Yaw stability control (ESC): when it acts, which way, how much, and that it is off by default."""
+
+from __future__ import annotations
+
+import pytest
+
+from mufusion.scenarios import load_scenario
+from mufusion.vehicle.actuators import ActuatorCommand
+from mufusion.vehicle.params import CAR, TRUCK
+from mufusion.vehicle.plant import Plant, initial_state
+from mufusion.vehicle.stability_control import StabilityControlSettings, YawStabilityController
+
+
+def test_it_acts_only_on_a_yaw_rate_beyond_what_steering_and_cornering_explain() -> None:
+    esc = YawStabilityController(TRUCK, StabilityControlSettings())
+    wheelbase = TRUCK.cog_to_front_axle_m + TRUCK.cog_to_rear_axle_m
+    # Turning as the steering asks (ψ̇ = v δ / L, with the lateral acceleration to match).
+    assert esc.moment(15.0, 15.0 * 0.05 / wheelbase, 0.05, 15.0**2 * 0.05 / wheelbase, 0.9) == (
+        0.0, 0.0)
+    # Cornering at speed with little (here slightly opposite) steering: the lateral acceleration
+    # explains the yaw rate; braking against it turned the truck out of a 150 m arc (0061).
+    assert esc.moment(17.0, 0.08, -0.008, 17.0 * 0.08, 0.9) == (0.0, 0.0)
+    # Slow, or within the deadband: passive.
+    assert esc.moment(2.0, 1.0, 0.0, 0.0, 0.9) == (0.0, 0.0)
+    assert esc.moment(15.0, 0.04, 0.0, 0.0, 0.9) == (0.0, 0.0)
+    # A right turn rotating faster than its steering and its lateral acceleration explain: a
+    # moment to the left, and the braked wheel's force slows the vehicle.
+    mz, fx = esc.moment(15.0, -0.6, -0.09, -6.0, 0.9)
+    assert mz > 0.0 > fx
+    assert fx == pytest.approx(-mz / (0.5 * TRUCK.track_width_m))
+    # Mirrored, the same magnitudes.
+    mz_left, fx_left = esc.moment(15.0, 0.6, 0.09, 6.0, 0.9)
+    assert mz_left == pytest.approx(-mz) and fx_left == pytest.approx(fx)
+
+
+def test_the_moment_is_bounded_by_the_braked_wheels_friction() -> None:
+    esc = YawStabilityController(CAR, StabilityControlSettings())
+    wheel_load = 0.5 * CAR.mass_kg * 9.81 * CAR.cog_to_rear_axle_m / (
+        CAR.cog_to_front_axle_m + CAR.cog_to_rear_axle_m)
+    for mu in (0.2, 0.9):
+        mz, _ = esc.moment(20.0, 2.0, 0.0, 0.0, mu)  # far beyond any target
+        assert mz == pytest.approx(-mu * wheel_load * 0.5 * CAR.track_width_m)
+
+
+def test_settings_are_checked_by_name() -> None:
+    with pytest.raises(ValueError, match="response_time_s"):
+        StabilityControlSettings(response_time_s=0.0)
+    with pytest.raises(ValueError, match="yaw_rate_deadband_radps"):
+        StabilityControlSettings(yaw_rate_deadband_radps=-0.1)
+    with pytest.raises(ValueError, match="stability_control"):
+        Plant(CAR, initial_state(CAR, 0.0, 0.0, 0.0, 10.0), stability_control=True)  # type: ignore[arg-type]
+
+
+def test_it_is_off_by_default_and_damps_a_spinning_plant() -> None:
+    assert load_scenario("turn").sim.stability_control() is None
+    assert load_scenario("turn", ["sim.esc=true"]).sim.stability_control() is not None
+    # The truck at 15 m/s with a yaw rate twice what its steering asks, the steering held:
+    # with ESC the yaw rate falls towards the steering's within a second, without it it does not.
+    final = {}
+    for esc in (None, StabilityControlSettings()):
+        x0 = initial_state(TRUCK, 0.0, 0.0, 0.0, 15.0)
+        x0[5] = -0.6  # yaw rate [rad/s]
+        plant = Plant(TRUCK, x0, stability_control=esc)
+        for _ in range(200):
+            out = plant.step(ActuatorCommand(-0.09, 0.0, 0.0), 0.9, 0.9)
+        final[esc is None] = (abs(float(out.x[5])), plant.stability_control_active_s)
+    assert final[True][1] == 0.0 < final[False][1]
+    assert final[False][0] < final[True][0]
