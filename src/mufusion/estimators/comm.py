@@ -221,3 +221,23 @@ def decode(msg: Message, header: FrictionReport) -> FrictionReport:
         lower = lo * q + DENM_MU_MIN * (1.0 - q)
         return replace(header, mu=0.5 * (lower + hi), lower_mu=lower, upper_mu=hi)
     raise ValueError(f"message kind must be one of {MESSAGE_KINDS}, got {msg.kind!r}")
+
+
+@dataclass(frozen=True)
+class ReportInbox:
+    """What one receiver gets over a link: the deliveries, read by time (pure; no state).
+
+    Examples
+    --------
+    >>> r = FrictionReport.numeric(5.0, 0.5, 0.025, t_created_s=0.0)
+    >>> box = ReportInbox((Delivery(r, 1.0),), CommModel(validity_s=60.0))
+    >>> len(box.at(0.5)), len(box.at(2.0)), len(box.at(100.0))
+    (0, 1, 0)
+    """
+
+    deliveries: tuple[Delivery, ...]
+    comm: CommModel
+
+    def at(self, t_s: float) -> list[FrictionReport]:
+        """The reports arrived by ``t_s`` and still valid (:func:`received`)."""
+        return received(self.deliveries, t_s, self.comm)
