@@ -395,5 +395,6 @@ def _run_specs(specs: list, out: Path, jobs: int | None) -> tuple[list, list[dic
     return results, runs
 
 
+from mufusion import cli_fleet  # noqa: E402, F401, I001  (registers `mufusion fleet`)
 if __name__ == "__main__":  # pragma: no cover
     app()

@@ -70,7 +70,7 @@ class SharedSettings:
 
     tau_s: float = 1800.0
     validity_s: float = 3600.0
-    gradient_bound_per_m: float = 0.02
+    gradient_bound_per_m: float = 0.01
     reach_m: float = 2.0
     sender_cap: float = 3.0
     trust_test: bool = True
@@ -86,7 +86,7 @@ class SharedSettings:
 
 
 DEFAULT_SHARED = SharedSettings()
-"""The default report handling (τ = 1800 s, G = 0.02 /m, reach 2 m, 3 reports per sender)."""
+"""The default report handling (τ = 1800 s, G = 0.01 /m, reach 2 m, 3 reports per sender)."""
 
 
 def age_variance(age_s: np.ndarray, prior_std: float, tau_s: float) -> np.ndarray:

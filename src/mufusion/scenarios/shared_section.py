@@ -34,7 +34,7 @@ class SharedSection(_Strict):
     supplies them."""
     tau_s: float = 1800.0
     validity_s: float = 3600.0
-    gradient_bound_per_m: float = 0.02
+    gradient_bound_per_m: float = 0.01
     reach_m: float = 2.0
     sender_cap: float = 3.0
     trust_test: bool = True
@@ -51,9 +51,9 @@ class SharedSection(_Strict):
     replay_restamped: bool = True
     sybil_share: float = 0.0
     sybil_identities: int = 10
-    fleet_delay_s: float = 60.0
+    fleet_delay_s: float = 10.0
     """Fleet runs: time between two vehicles' starts [s], in [0, 1e5]."""
-    position_std_m: float = 1.0
+    position_std_m: float = 0.5
     """Fleet runs: position error along s of a vehicle's reports [m] (the slip estimate stands
     for the tyres' contact patches, a wheelbase apart, and the map match has its own error)."""
 
