@@ -11,13 +11,15 @@ import logging
 import signal
 import time
 from pathlib import Path
-from typing import Annotated, NoReturn
+from typing import Annotated
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
-from mufusion.cli_progress import print_table, progress_bar
+from mufusion.cli_fleet import fleet
+from mufusion.cli_progress import console, print_table, progress_bar
+from mufusion.cli_progress import fail as _fail
 
 app = typer.Typer(
     name="mufusion",
@@ -29,7 +31,7 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-console = Console(stderr=True)
+app.command()(fleet)  # `mufusion fleet` (cli_fleet.py)
 
 
 @app.callback()
@@ -41,11 +43,6 @@ def _main(
         level=logging.INFO if verbose else logging.ERROR,
         format="%(levelname)s %(name)s: %(message)s",
     )
-
-
-def _fail(message: str) -> NoReturn:
-    console.print(f"[red]error:[/red] {message}")
-    raise typer.Exit(code=2)
 
 
 @app.command()
@@ -395,6 +392,5 @@ def _run_specs(specs: list, out: Path, jobs: int | None) -> tuple[list, list[dic
     return results, runs
 
 
-from mufusion import cli_fleet  # noqa: E402, F401, I001  (registers `mufusion fleet`)
 if __name__ == "__main__":  # pragma: no cover
     app()

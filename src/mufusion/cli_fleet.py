@@ -1,6 +1,6 @@
 """``mufusion fleet``: N vehicles on one road, each one's estimates shared with those behind it
 (issue 40; :mod:`mufusion.scenarios.fleet`). Registered on the ``mufusion`` app by
-:mod:`mufusion.cli`."""
+:mod:`mufusion.cli` (this module does not import it: no cycle)."""
 
 from __future__ import annotations
 
@@ -10,11 +10,10 @@ from typing import Annotated
 
 import typer
 
-from mufusion.cli import _fail, app, console
-from mufusion.cli_progress import print_table
+from mufusion.cli_progress import console, print_table
+from mufusion.cli_progress import fail as _fail
 
 
-@app.command()
 def fleet(
     scenario: Annotated[
         str, typer.Argument(help="Built-in scenario ('turn' or 'popup') or a scenario .toml file.")

@@ -35,7 +35,7 @@ from typing import Literal
 
 import numpy as np
 
-from mufusion.estimators.shared import FrictionReport
+from mufusion.estimators.shared import FrictionReport, check_in
 
 MessageKind = Literal["vss", "ivim", "denm"]
 MESSAGE_KINDS: tuple[str, ...] = ("vss", "ivim", "denm")
@@ -68,13 +68,6 @@ defines no μ). A sub-cause not listed (0 unavailable, fuel, mud, chippings, sal
 ``(DENM_MU_MIN, DENM_SEND_BELOW)``."""
 
 
-def _check(name: str, value: float, lo: float, hi: float, unit: str = "") -> float:
-    x = float(value)
-    if not lo <= x <= hi:  # also rejects NaN
-        raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}]{unit}, got {value!r}")
-    return x
-
-
 @dataclass(frozen=True)
 class CommModel:
     """The link between senders and the receiver.
@@ -103,11 +96,11 @@ class CommModel:
     message: MessageKind = "vss"
 
     def __post_init__(self) -> None:
-        _check("rate_hz", self.rate_hz, 1e-9, 100.0, " Hz")
-        _check("latency_s", self.latency_s, 0.0, 60.0, " s")
-        _check("jitter_s", self.jitter_s, 0.0, 60.0, " s")
-        _check("loss", self.loss, 0.0, 1.0 - 1e-12)
-        _check("validity_s", self.validity_s, 1e-9, 86400.0, " s")
+        check_in("rate_hz", self.rate_hz, 1e-9, 100.0, " Hz")
+        check_in("latency_s", self.latency_s, 0.0, 60.0, " s")
+        check_in("jitter_s", self.jitter_s, 0.0, 60.0, " s")
+        check_in("loss", self.loss, 0.0, 1.0 - 1e-12)
+        check_in("validity_s", self.validity_s, 1e-9, 86400.0, " s")
         if self.message not in MESSAGE_KINDS:
             raise ValueError(f"message must be one of {MESSAGE_KINDS}, got {self.message!r}")
 

@@ -20,14 +20,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from mufusion.estimators.shared import REPORT_MU_RANGE, FrictionReport
-
-
-def _check(name: str, value: float, lo: float, hi: float, unit: str = "") -> float:
-    x = float(value)
-    if not lo <= x <= hi:  # also rejects NaN
-        raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}]{unit}, got {value!r}")
-    return x
+from mufusion.estimators.shared import REPORT_MU_RANGE, FrictionReport, check_in
 
 
 @dataclass(frozen=True)
@@ -65,11 +58,11 @@ class WrongReports:
 
     def __post_init__(self) -> None:
         for name in ("offset_share", "offset", "replay_share", "replay_drop", "sybil_share"):
-            _check(name, getattr(self, name), 0.0, 1.0)
-        _check("replay_age_s", self.replay_age_s, 0.0, 1e6, " s")
+            check_in(name, getattr(self, name), 0.0, 1.0)
+        check_in("replay_age_s", self.replay_age_s, 0.0, 1e6, " s")
         if isinstance(self.sybil_identities, bool) or not isinstance(self.sybil_identities, int):
             raise ValueError(f"sybil_identities must be an integer, got {self.sybil_identities!r}")
-        _check("sybil_identities", self.sybil_identities, 1, 1000)
+        check_in("sybil_identities", self.sybil_identities, 1, 1000)
         if not isinstance(self.replay_restamped, bool):
             raise ValueError(f"replay_restamped must be a bool, got {self.replay_restamped!r}")
 

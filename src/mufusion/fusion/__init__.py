@@ -18,6 +18,7 @@ See ``docs/fusion.md``. Modules, upstream first:
   ``fuse_batch``.
 """
 
+from mufusion.estimators.shared import DEFAULT_SHARED, SharedSettings
 from mufusion.fusion.assembly import (
     DEFAULT_GRID_M,
     DEFAULT_S_LOCAL_M,
@@ -52,7 +53,7 @@ from mufusion.fusion.prior import (
     Z95,
     GPPrior,
 )
-from mufusion.fusion.reports import DEFAULT_SHARED, ReportData, SharedSettings, report_data
+from mufusion.fusion.reports import ReportData, report_data
 from mufusion.fusion.safe import SHARED_ERROR_FRACTION
 from mufusion.fusion.shared_fusion import ReportScreen, screen_reports
 

@@ -32,61 +32,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mufusion.estimators.shared import FrictionReport
+from mufusion.estimators.shared import (
+    DEFAULT_SHARED,
+    FrictionReport,
+    SharedSettings,
+    check_in,
+)
 from mufusion.fusion.data import MARGIN_RANGE, NOISE_STD_FLOOR, POSITION_RANGE_M
 from mufusion.fusion.prior import Z95, GPPrior
-
-
-def _check(name: str, value: float, lo: float, hi: float, unit: str = "") -> float:
-    x = float(value)
-    if not lo <= x <= hi:  # also rejects NaN
-        raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}]{unit}, got {value!r}")
-    return x
-
-
-@dataclass(frozen=True)
-class SharedSettings:
-    """How the fusion treats shared reports (decision 0060).
-
-    Attributes
-    ----------
-    tau_s
-        Ageing time constant τ [s], in [1, 1e6]: after τ a report has lost 63 % of what it told
-        beyond the prior (the only published staleness horizon for slippery-road classes is
-        0–120 min; 30 min sits in its middle).
-    validity_s
-        Reports older than this are dropped [s], in (0, 1e6] (DENM's validityDuration).
-    gradient_bound_per_m
-        Declared bound G on |dμ/ds| within one camera class segment [1/m], in [0, 1].
-    reach_m
-        A report informs the hard bound at evaluation points within this distance of it (plus
-        its 95 % position error) [m], in [0, 100].
-    sender_cap
-        Most reports of one sender counted within a length scale [-], in [1, 1e6].
-    trust_test
-        Whether reports optimistic beyond the combined bounds of the vehicle's own estimate are
-        rejected (:func:`screen_reports`).
-    """
-
-    tau_s: float = 1800.0
-    validity_s: float = 3600.0
-    gradient_bound_per_m: float = 0.01
-    reach_m: float = 2.0
-    sender_cap: float = 3.0
-    trust_test: bool = True
-
-    def __post_init__(self) -> None:
-        _check("tau_s", self.tau_s, 1.0, 1e6, " s")
-        _check("validity_s", self.validity_s, 1e-9, 1e6, " s")
-        _check("gradient_bound_per_m", self.gradient_bound_per_m, 0.0, 1.0, " 1/m")
-        _check("reach_m", self.reach_m, 0.0, 100.0, " m")
-        _check("sender_cap", self.sender_cap, 1.0, 1e6)
-        if not isinstance(self.trust_test, bool):
-            raise ValueError(f"trust_test must be a bool, got {self.trust_test!r}")
-
-
-DEFAULT_SHARED = SharedSettings()
-"""The default report handling (τ = 1800 s, G = 0.01 /m, reach 2 m, 3 reports per sender)."""
 
 
 def age_variance(age_s: np.ndarray, prior_std: float, tau_s: float) -> np.ndarray:
@@ -193,8 +146,8 @@ def report_data(
     >>> d.s_m.tolist(), bool(d.margin[0] > 0.025)
     ([12.0], True)
     """
-    _check("t_now_s", t_now_s, -1e12, 1e12, " s")
-    _check("s_ego_m", s_ego_m, *POSITION_RANGE_M, " m")
+    check_in("t_now_s", t_now_s, -1e12, 1e12, " s")
+    check_in("s_ego_m", s_ego_m, *POSITION_RANGE_M, " m")
     lo_w, hi_w = (float(w) for w in window_m)
     if not lo_w < hi_w:
         raise ValueError(f"window_m must be an increasing pair, got {window_m!r}")

@@ -2,7 +2,7 @@
 
 Read by the configurations F+shared and F-safe+shared (ignored by the others): where the reports
 come from (a reports file, or the vehicles ahead in a fleet run), how the fusion treats them
-(:class:`~mufusion.fusion.SharedSettings`), how they travel
+(:class:`~mufusion.estimators.shared.SharedSettings`), how they travel
 (:class:`~mufusion.estimators.comm.CommModel`) and which of them are wrong
 (:class:`~mufusion.estimators.misbehaviour.WrongReports`). Each field's range is the record's;
 a bad value is reported at load time naming the field.
@@ -20,8 +20,7 @@ from pydantic import model_validator
 
 from mufusion.estimators.comm import CommModel, ReportInbox, transmit
 from mufusion.estimators.misbehaviour import WrongReports, corrupt
-from mufusion.estimators.shared import FrictionReport
-from mufusion.fusion.reports import SharedSettings
+from mufusion.estimators.shared import FrictionReport, SharedSettings
 from mufusion.scenarios.sections import _Strict
 
 
