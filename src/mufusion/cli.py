@@ -17,9 +17,9 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from mufusion.cli_fleet import fleet
 from mufusion.cli_progress import console, print_table, progress_bar
 from mufusion.cli_progress import fail as _fail
+from mufusion.cli_shared import calibrate_shared, fleet
 
 app = typer.Typer(
     name="mufusion",
@@ -31,7 +31,7 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-app.command()(fleet)  # `mufusion fleet` (cli_fleet.py)
+app.command()(fleet)  # `mufusion fleet` (cli_shared.py)
 
 
 @app.callback()
@@ -328,6 +328,7 @@ def calibrate(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path(
         "results/calibration"
     ),
+    shared: Annotated[bool, typer.Option(help="With shared reports: by age, wrong share.")] = False,
 ) -> None:
     """Calibrate the fusion without a closed loop: random horizons (class layouts, errors within
     the declared margins, local estimate present or absent) fused in both modes; writes
@@ -347,6 +348,8 @@ def calibrate(
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         _fail(f"--out cannot be created: {err}")
+    if shared:
+        return calibrate_shared(horizons, seed, out)
     started = time.perf_counter()
     result = calibrate_fusion(np.random.default_rng(seed), n_horizons=horizons)
     elapsed = time.perf_counter() - started

@@ -1,6 +1,7 @@
-"""``mufusion fleet``: N vehicles on one road, each one's estimates shared with those behind it
-(issue 40; :mod:`mufusion.scenarios.fleet`). Registered on the ``mufusion`` app by
-:mod:`mufusion.cli` (this module does not import it: no cycle)."""
+"""The command line of shared reports (issue 40): ``mufusion fleet`` (N vehicles on one road,
+each one's estimates shared with those behind it; :mod:`mufusion.scenarios.fleet`) and
+``mufusion calibrate --shared`` (:mod:`mufusion.fusion.calibration_shared`). Registered on the
+``mufusion`` app by :mod:`mufusion.cli` (this module does not import it: no cycle)."""
 
 from __future__ import annotations
 
@@ -71,3 +72,36 @@ def fleet(
                                        out / "first_vs_last.png"))
     print_table(rows)
     console.print(f"{vehicles} logs, summary.json and {len(figures)} figures in [bold]{out}[/bold]")
+
+
+def calibrate_shared(horizons: int, seed: int, out: Path) -> None:
+    """``mufusion calibrate --shared``: the calibration with reports by age and wrong share
+    (at most ``MAX_SHARED_HORIZONS`` horizons: each is fused one by one, per cell and mode)."""
+    import numpy as np
+    from rich.table import Table
+
+    from mufusion.fusion.calibration_shared import calibrate_shared as run
+    from mufusion.fusion.calibration_shared import cells_to_dicts
+
+    n = min(horizons, MAX_SHARED_HORIZONS)
+    console.print(f"calibration with shared reports on {n} horizons (seed {seed})")
+    cells = run(np.random.default_rng(seed), n)
+    payload = {"command": {"horizons": n, "seed": seed, "shared": True},
+               "cells": cells_to_dicts(cells)}
+    (out / "calibration_shared.json").write_text(json.dumps(payload, indent=2))
+    table = Table(title=f"fusion calibration with shared reports, {n} horizons, seed {seed}")
+    for header in ("age s", "wrong share", "mode", "over %", "over % no reports",
+                   "cover %", "mean μ̂", "mean μ̂ no reports"):
+        table.add_column(header, justify="right")
+    for c in cells:
+        table.add_row(f"{c.age_s:g}", f"{c.wrong_share:g}", c.mode,
+                      f"{100 * c.over_estimate_rate:.2f}",
+                      f"{100 * c.over_estimate_rate_without:.2f}",
+                      f"{100 * c.lower_coverage:.1f}", f"{c.mean_mu_hat:.3f}",
+                      f"{c.mean_mu_hat_without:.3f}")
+    console.print(table)
+    console.print(f"{out / 'calibration_shared.json'}")
+
+
+MAX_SHARED_HORIZONS = 2000
+"""Most horizons ``calibrate --shared`` draws."""
