@@ -21,12 +21,12 @@ received reports (:class:`~mufusion.fusion.reports.ReportData`):
 4. **Safe mode's hard bound with reports.** ``H(s) = max(H_own(s), H_rep(s))`` where some
    report confirms at s, else ``H_own(s)``, with
    ``H_rep(s) = min_r lower_r(Δt) − min_c G·(|s − s_c| + δ_c)``, r over the kept reports within
-   ``reach_m + δ_r`` of s, c over those that confirm at s. Under the premise it is at most
-   ``lower_c − G·(|s − s_c| + δ_c) ≤ μ(s)`` for the confirming report c of the smallest term.
-   The minimum of the bounds, not the maximum, although each is valid under the premise: one
-   optimistic report (or any number of Sybil identities) cannot lift H above what the honest
-   reports nearby allow. μ̂ = min(one-sided paper lower bound, H) on the data, and also at most
-   the one-sided grouped lower bound beyond them.
+   ``reach_m + δ_r`` of s or in its class segment, c over those that confirm at s. Under the
+   premise it is at most ``lower_c − G·(|s − s_c| + δ_c) ≤ μ(s)`` for the confirming report c
+   of the smallest term. The minimum of the bounds, not the maximum, although each is valid
+   under the premise: one optimistic report (or any number of Sybil identities) cannot lift H
+   above what the honest reports in the segment allow. μ̂ = min(one-sided paper lower bound, H)
+   on the data, and also at most the one-sided grouped lower bound beyond them.
 """
 
 from __future__ import annotations
@@ -131,10 +131,11 @@ def _report_bound(
     one_segment = inside & (changes[i1] == changes[i0])
     confirms = within & confirmers[None, :] & one_segment
     confirmed = confirms.any(axis=1)
-    # The lowest bound in the window less the smallest position term of a *confirming* report c:
-    # ≤ lower_c − G·(|s − s_c| + δ_c) ≤ μ(s) under the premise (decision 0060), and no report,
-    # nor any number of identities, lifts it above the lowest report near s.
-    lowest = np.where(within, r.lower[None, :], np.inf).min(axis=1)
+    # The lowest bound of every kept report near s or in its class segment, less the smallest
+    # position term of a *confirming* report c: ≤ lower_c − G·(|s − s_c| + δ_c) ≤ μ(s) under the
+    # premise (decision 0060), and no report, nor any number of identities, lifts it above the
+    # lowest report of the segment.
+    lowest = np.where(within | one_segment, r.lower[None, :], np.inf).min(axis=1)
     shift = np.where(confirms, g * (dist + r.position_bound_m[None, :]), np.inf).min(axis=1)
     h_rep = np.where(confirmed, lowest - np.where(confirmed, shift, 0.0), -np.inf)
     return h_rep, confirmed
