@@ -88,7 +88,7 @@ class CommModel:
         Message content, one of ``MESSAGE_KINDS``.
     """
 
-    rate_hz: float = 1.0
+    rate_hz: float = 5.0
     latency_s: float = 0.5
     jitter_s: float = 0.3
     loss: float = 0.1

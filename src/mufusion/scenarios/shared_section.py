@@ -20,8 +20,10 @@ from pydantic import model_validator
 
 from mufusion.estimators.comm import CommModel, ReportInbox, transmit
 from mufusion.estimators.misbehaviour import WrongReports, corrupt
-from mufusion.estimators.shared import FrictionReport, SharedSettings
+from mufusion.estimators.shared import DEFAULT_SHARED, FrictionReport, SharedSettings
 from mufusion.scenarios.sections import _Strict
+
+_S, _C, _W = DEFAULT_SHARED, CommModel(), WrongReports()
 
 
 class SharedSection(_Strict):
@@ -31,25 +33,26 @@ class SharedSection(_Strict):
     """A JSON list of reports (the fields of ``FrictionReport``; the map's s and times on this
     run's clock), relative to the working directory; None: no reports unless a fleet run
     supplies them."""
-    tau_s: float = 1800.0
-    validity_s: float = 3600.0
-    gradient_bound_per_m: float = 0.01
-    reach_m: float = 2.0
-    sender_cap: float = 3.0
-    trust_test: bool = True
-    rate_hz: float = 5.0
-    latency_s: float = 0.5
-    jitter_s: float = 0.3
-    loss: float = 0.1
-    message: Literal["vss", "ivim", "denm"] = "vss"
-    offset_share: float = 0.0
-    offset: float = 0.2
-    replay_share: float = 0.0
-    replay_age_s: float = 3600.0
-    replay_drop: float = 0.3
-    replay_restamped: bool = True
-    sybil_share: float = 0.0
-    sybil_identities: int = 10
+    # Defaults are the records' own (each number defined once).
+    tau_s: float = _S.tau_s
+    validity_s: float = _S.validity_s
+    gradient_bound_per_m: float = _S.gradient_bound_per_m
+    reach_m: float = _S.reach_m
+    sender_cap: float = _S.sender_cap
+    trust_test: bool = _S.trust_test
+    rate_hz: float = _C.rate_hz
+    latency_s: float = _C.latency_s
+    jitter_s: float = _C.jitter_s
+    loss: float = _C.loss
+    message: Literal["vss", "ivim", "denm"] = _C.message
+    offset_share: float = _W.offset_share
+    offset: float = _W.offset
+    replay_share: float = _W.replay_share
+    replay_age_s: float = _W.replay_age_s
+    replay_drop: float = _W.replay_drop
+    replay_restamped: bool = _W.replay_restamped
+    sybil_share: float = _W.sybil_share
+    sybil_identities: int = _W.sybil_identities
     fleet_delay_s: float = 10.0
     """Fleet runs: time between two vehicles' starts [s], in [0, 1e5]."""
     position_std_m: float = 0.5
