@@ -2,8 +2,9 @@
 same vehicle without reports, on the turn scenario, car and truck, over seeds.
 
 Per vehicle type and seed: the turn with true μ 0.5 in the turn (the wet class's value, so that
-F-safe, which plans on the class's lower edge 0.4 until its slip estimator measures, has a gap to
-GT), random estimator errors within their margins, and a small start perturbation.
+F-safe, which plans on the class's lower edge until its slip estimator measures, has a gap to
+GT), a random local error within ± 0.025, the camera's error none or random within its margin
+(``CAMERA_ERRORS``), and a small start perturbation.
 
 * Baselines on vehicle N+1's seed: GT, F, F-safe (no reports).
 * Per family (F+shared, F-safe+shared): vehicles 1 … N drive the road one after another with
@@ -46,9 +47,13 @@ WRONG_SHARE = 0.2
 GAP_MIN = 0.005
 """A baseline gap to GT in planned utilisation below this is no gap (closure not defined)."""
 OVERRIDES = (
-    "friction.mu_turn=0.5", "estimation.local_error=random", "estimation.predictive_error=random",
-    "perturbation.speed_mps=0.5", "perturbation.lateral_offset_m=0.1", "shared.validity_s=100000",
+    "friction.mu_turn=0.5", "estimation.local_error=random", "perturbation.speed_mps=0.5",
+    "perturbation.lateral_offset_m=0.1", "shared.validity_s=100000",
 )
+"""Every run's scenario overrides; the camera's error model is the study's parameter."""
+CAMERA_ERRORS = ("none", "random")
+"""``none``: the camera reports the class value (the paper's emulation; F-safe then plans on the
+class's lower edge, a gap of the class margin); ``random``: uniform within the margin."""
 FAMILIES = {Configuration.F_SHARED: Configuration.F,
             Configuration.F_SAFE_SHARED: Configuration.F_SAFE}
 
@@ -87,9 +92,10 @@ def _received(cfg, logs: list[RunLog], delay_s: float, rng_key: tuple[int, ...],
     return make_inbox(reports, section, np.random.default_rng(np.random.SeedSequence(rng_key)))
 
 
-def study_seed(vehicle: str, seed: int) -> dict:
+def study_seed(vehicle: str, seed: int, camera: str = "none") -> dict:
     """Every run of one vehicle type and seed; the facts of vehicle N+1 and the baselines."""
-    cfg = load_scenario("turn", [*OVERRIDES, f"vehicle={vehicle}"])
+    cfg = load_scenario("turn", [*OVERRIDES, f"vehicle={vehicle}",
+                                 f"estimation.predictive_error={camera}"])
     base_seed = 1000 * seed + N_AHEAD  # vehicle N+1's seed; vehicle j has 1000·seed + j − 1
     out: dict = {"vehicle": vehicle, "seed": seed}
     for c in (Configuration.GT, Configuration.F, Configuration.F_SAFE):
@@ -148,13 +154,17 @@ def summarise(rows: list[dict]) -> dict:
 
 
 def main(argv: list[str]) -> None:
-    """``OUT.json [SEEDS]``: run the study (car and truck, seeds 0 … SEEDS−1) and write it."""
+    """``OUT.json [SEEDS [CAMERA]]``: run the study (car and truck, seeds 0 … SEEDS−1, the
+    camera's error model one of ``CAMERA_ERRORS``, default none) and write it."""
     out = Path(argv[0])
     seeds = int(argv[1]) if len(argv) > 1 else 5
+    camera = argv[2] if len(argv) > 2 else "none"
+    if camera not in CAMERA_ERRORS:
+        raise SystemExit(f"CAMERA must be one of {CAMERA_ERRORS}, got {camera!r}")
     rows = []
     for vehicle in ("car", "truck"):
         for seed in range(seeds):
-            rows.append(study_seed(vehicle, seed))
+            rows.append(study_seed(vehicle, seed, camera))
             print(f"{vehicle} seed {seed} done", flush=True)
             out.write_text(json.dumps({"rows": rows, "summary": summarise(rows)}, indent=2))
 
