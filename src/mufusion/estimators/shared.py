@@ -19,9 +19,13 @@ REPORT_MU_RANGE = (0.0, 2.0)
 """Allowed μ of a report [-] (the fusion's ``MU_RANGE``)."""
 
 
-def check_in(name: str, value: float, lo: float, hi: float, unit: str = "") -> float:
-    """``float(value)`` if within ``[lo, hi]``, else ValueError naming ``name`` and the range."""
-    x = float(value)
+def check_in(name: str, value: object, lo: float, hi: float, unit: str = "") -> float:
+    """``float(value)`` if it is a number within ``[lo, hi]``, else ValueError naming ``name``
+    and the range (the one range check of the estimators' and the fusion's records)."""
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a finite number, got {value!r}") from None
     if not lo <= x <= hi:  # also rejects NaN
         raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}]{unit}, got {value!r}")
     return x
