@@ -92,3 +92,13 @@ def test_report_puts_every_difference_next_to_an_explanation(reproduction):
     assert any((out / "figures").glob("turn-*-slide.png"))
     assert any((out / "figures").glob("*.png"))
     assert {r["config"] for r in runs.values()} == {"GT", "L", "P", "F", "F-safe"}
+
+
+def test_report_opens_in_a_browser_with_every_figure_loaded(reproduction):
+    from browser import load_in_browser
+
+    out, _ = reproduction
+    seen = load_in_browser(out / "report.html")
+    assert len(seen.images) >= 5, seen.images
+    assert seen.broken_images == [] and seen.failed_requests == []
+    assert seen.console_errors == []

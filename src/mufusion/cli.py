@@ -17,7 +17,8 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from mufusion.cli_progress import console, print_table, progress_bar
+from mufusion.cli_commonroad import import_commonroad
+from mufusion.cli_progress import console, print_table, progress_bar, run_specs
 from mufusion.cli_progress import fail as _fail
 from mufusion.cli_shared import calibrate_shared, fleet
 
@@ -31,6 +32,7 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+app.command("import-commonroad")(import_commonroad)
 app.command()(fleet)  # `mufusion fleet` (cli_shared.py)
 
 
@@ -140,7 +142,7 @@ def reproduce(
     from mufusion.campaign import with_indices
 
     # One index per run over both lists: run directory names never collide.
-    results, all_runs = _run_specs(with_indices([*specs, *extra]), out, jobs)
+    results, all_runs = run_specs(with_indices([*specs, *extra]), out, jobs, console)
     runs, ablation_runs = all_runs[: len(specs)], all_runs[len(specs):]
     run_dirs = {(spec.variant, spec.config): directory
                 for spec, _m, directory in results[: len(specs)]}
@@ -373,26 +375,6 @@ def calibrate(
         f"nominal lower-bound coverage {100 * result.nominal_coverage:.1f} %; "
         f"{elapsed:.1f} s; {out / 'calibration.json'}, {figure.name}"
     )
-
-
-def _run_specs(specs: list, out: Path, jobs: int | None) -> tuple[list, list[dict]]:
-    """Run a campaign's specs under a progress bar; its results and their ``runs`` entries."""
-    from mufusion.campaign import run_campaign
-
-    with progress_bar(console) as progress:
-        task = progress.add_task("runs", total=len(specs))
-        try:
-            results = run_campaign(
-                specs, out / "runs", jobs=jobs, on_done=lambda _s: progress.advance(task)
-            )
-        except RuntimeError as err:  # some runs failed; the others are saved
-            _fail(str(err))
-    runs = [
-        {"scenario": s.scenario, "variant": s.variant, "config": s.config, "log": str(d),
-         **m.to_dict()}
-        for s, m, d in results
-    ]
-    return results, runs
 
 
 if __name__ == "__main__":  # pragma: no cover

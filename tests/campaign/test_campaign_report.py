@@ -99,3 +99,14 @@ def test_rates_are_split_by_the_oracles_class():
     # One class only, or no oracle column: nothing to split.
     assert rates_by_class_markdown(table[table["feasibility"] == "feasible"]) == []
     assert rates_by_class_markdown(table.drop(columns="feasibility")) == []
+
+
+def test_campaign_report_opens_in_a_browser_with_every_image_loaded(tmp_path):
+    from browser import load_in_browser
+
+    directory = _campaign_dir(tmp_path)
+    assert CliRunner().invoke(app, ["campaign-report", str(directory)]).exit_code == 0
+    seen = load_in_browser(directory / "report" / "report.html")
+    assert len(seen.images) >= 4, seen.images
+    assert seen.broken_images == [] and seen.failed_requests == []
+    assert seen.console_errors == []

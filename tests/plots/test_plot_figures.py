@@ -16,11 +16,17 @@ from mufusion.plots import (
     plot_planned_forces,
     plot_snapshots,
 )
-from mufusion.plots._common import footprint_xy, row_at_position
+from mufusion.plots._common import (
+    draw_obstacles,
+    footprint_xy,
+    obstacle_corners_xy,
+    row_at_position,
+)
 from mufusion.plots.estimate import build_estimate_figure
 from mufusion.plots.forces import build_forces_figure
 from mufusion.plots.snapshots import build_snapshots_figure
 from mufusion.plots.traces import build_traces_figure
+from mufusion.sim.records import ObstacleTrace
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -181,3 +187,27 @@ def test_a_run_that_ended_early_shows_its_last_tick(saved_log, tmp_path: Path) -
     assert fig.axes[3].get_title() == "F, s = 40 m"
     with pytest.raises(ValueError, match="position must lie within"):
         plot_snapshots([p, f], [200.0], tmp_path / "x.png")
+
+
+def test_a_moving_obstacle_is_drawn_where_it_is_at_that_time(saved_log) -> None:
+    import matplotlib.pyplot as plt
+
+    meta = saved_log("turn", "GT").meta
+    s0 = 30.0  # on the straight before the turn (x = s there)
+    static = ObstacleTrace(s_m=s0, d_m=3.5, length_m=4.0, width_m=2.0, appear_time_s=None,
+                           corners_x_m=[32.0, 28.0, 28.0, 32.0],
+                           corners_y_m=[4.5, 4.5, 2.5, 2.5])
+    oncoming = static.model_copy(update={"speed_mps": -5.0})
+    moving_meta = meta.model_copy(update={"obstacles": [oncoming]})
+    # At 2 s its centre is at s = 30 − 10 = 20 m: x from 18 to 22, y (d = 3.5) from 2.5 to 4.5.
+    corners = obstacle_corners_xy(moving_meta, oncoming, 2.0)
+    np.testing.assert_allclose(np.sort(corners[:, 0]), [18.0, 18.0, 22.0, 22.0], atol=1e-9)
+    np.testing.assert_allclose(np.sort(corners[:, 1]), [2.5, 2.5, 4.5, 4.5], atol=1e-9)
+    # A static one keeps its logged corners at any time.
+    np.testing.assert_array_equal(obstacle_corners_xy(meta, static, 2.0)[:, 0],
+                                  static.corners_x_m)
+    fig, ax = plt.subplots()
+    assert draw_obstacles(ax, moving_meta, 2.0) == 1
+    (patch,) = _by_gid(ax, "obstacle")
+    assert patch.get_xy()[:, 0].min() == pytest.approx(18.0)
+    plt.close(fig)

@@ -20,6 +20,7 @@ from mufusion.road import (
     obstacle_active,
     opposing_lane_depth_m,
     rectangle_corners,
+    rectangles_overlap,
     road_margin_m,
     signed_clearance_m,
     straight_road,
@@ -230,3 +231,21 @@ def test_clearance_is_symmetric_and_matches_sampled_distance(x, y, heading, leng
             x, y, heading, length, width, 0.0, 0.0
         )
         assert sampled < 0.03 or contained
+
+
+def test_rectangles_overlap_where_the_clearance_is_negative() -> None:
+    # A batch of rectangles around a fixed one (apart, crossing, contained, axis-aligned ones
+    # touching it): the overlap test answers as the clearance's sign does, pair by pair.
+    rng = np.random.default_rng(3)
+    a = rectangle_corners(0.0, 0.0, 0.0, 4.0, 2.0)
+    b = np.concatenate([
+        rectangle_corners(rng.uniform(-6.0, 6.0, 250), rng.uniform(-4.0, 4.0, 250),
+                          rng.uniform(-3.2, 3.2, 250), length, width)
+        for length, width in ((1.0, 0.5), (6.0, 2.6))])
+    touching = rectangle_corners(np.array([4.0, 0.0, -4.0]), np.array([0.0, 2.0, 0.0]), 0.0,
+                                 4.0, 2.0)
+    for others in (b, touching):
+        overlap = rectangles_overlap(a, others)
+        np.testing.assert_array_equal(overlap, signed_clearance_m(a, others) < 0.0)
+    assert 0 < np.count_nonzero(rectangles_overlap(a, b)) < 500
+    assert not rectangles_overlap(a, touching).any()

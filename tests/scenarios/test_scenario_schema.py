@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mufusion.scenarios import load_scenario
-from mufusion.scenarios.config import VehicleName
+from mufusion.scenarios.sections import VehicleName
 from mufusion.vehicle.params import PRESETS, vehicle_preset
 
 

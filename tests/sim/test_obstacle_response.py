@@ -106,3 +106,34 @@ def test_failed_plans_at_rest_in_front_of_an_obstacle_start_no_minimal_risk_mano
     # At rest: ten failed plans in a row, no manoeuvre; moving (5 m/s): the manoeuvre after five.
     assert "minimal_risk" not in _events(0.0)
     assert "minimal_risk" in _events(5.0)
+
+
+def _traffic_mode(ob: PlannerObstacle, brake_first: bool = True, speed: float = 20.0) -> str:
+    return obstacle_mode([ob], state(speed), GRID, np.full(GRID.shape, 0.9), ROAD, TRUCK,
+                         ObstacleResponse(brake_first=brake_first))
+
+
+def test_traffic_outside_the_path_is_no_reason_to_evade() -> None:
+    # An oncoming car in the opposing lane: cruise in both settings (a static obstacle there
+    # would make the paper's rule evade: the static rule is unchanged).
+    oncoming = PlannerObstacle(100.0, 3.5, 4.5, 1.8, speed_mps=-15.0)
+    assert _traffic_mode(oncoming) == "cruise"
+    assert _traffic_mode(oncoming, brake_first=False) == "cruise"
+    assert _traffic_mode(PlannerObstacle(100.0, 3.5, 4.5, 1.8), brake_first=False) == "evade"
+
+
+def test_a_lead_is_followed_while_its_speed_can_be_matched() -> None:
+    front = TRUCK.cog_to_body_front_m
+    decel = 0.9 * np.cos(np.pi / 12) * 0.9 * 9.81
+    relative = 10.0  # 20 m/s behind a car at 10 m/s
+    # Matching 10 m/s needs 10·0.25 + 10²/(2 decel) = 8.3 m of gap (dead time 0.1 + 0.15 s).
+    need = relative * (0.1 + TRUCK.torque_time_constant_s) + relative**2 / (2 * decel)
+    at = 60.0 + front + 2.25 + 0.5
+    def lead(s_m: float) -> PlannerObstacle:
+        return PlannerObstacle(s_m, 0.0, 4.5, 1.8, speed_mps=10.0)
+
+    assert _traffic_mode(lead(at + need + 0.5)) == "cruise"
+    # Closer: a conflict; the road has room on the left, so evade.
+    assert _traffic_mode(lead(at + need - 0.5)) == "evade"
+    # Oncoming in the own lane: a conflict at any distance.
+    assert _traffic_mode(PlannerObstacle(300.0, 0.0, 4.5, 1.8, speed_mps=-5.0)) == "evade"

@@ -22,6 +22,7 @@ from mufusion.sim.supervision import (
     ProbingSettings,
     planned_footprint_violation_m,
     planned_obstacle_clearance_m,
+    planned_obstacle_hit,
     plausible_estimate,
     relaxed_estimate,
 )
@@ -316,6 +317,45 @@ def test_planned_obstacle_clearance_by_hand() -> None:
     hit = planned_obstacle_clearance_m(x, [ob], TRUCK)
     assert hit < 0.0
     assert planned_obstacle_clearance_m(x, [], TRUCK) == np.inf
+
+
+def _random_plans(rng: np.random.Generator, count: int):
+    """``count`` plans of 41 states over 60 m at random offsets and headings."""
+    for _ in range(count):
+        x = np.zeros((41, 6))
+        x[:, State.s] = np.linspace(0.0, 60.0, 41) + rng.uniform(-1.0, 1.0)
+        x[:, State.d] = rng.uniform(-4.0, 4.0) + rng.normal(0.0, 0.3, 41)
+        x[:, State.dpsi] = rng.normal(0.0, 0.1, 41)
+        yield x
+
+
+def test_planned_obstacle_hit_agrees_with_the_clearance() -> None:
+    # Plans swept past two obstacles at random offsets, some through them, some beside them:
+    # the bounding-box shortcut must answer as the full computation does.
+    from mufusion.planner import PlannerObstacle
+
+    rng = np.random.default_rng(7)
+    obstacles = [PlannerObstacle(s_m=30.0, d_m=0.4, length_m=1.0, width_m=1.5),
+                 PlannerObstacle(s_m=45.0, d_m=-1.0, length_m=4.0, width_m=2.0)]
+    answers = set()
+    for x in _random_plans(rng, 400):
+        hit = planned_obstacle_hit(x, obstacles, TRUCK)
+        assert hit == (planned_obstacle_clearance_m(x, obstacles, TRUCK) < 0.0)
+        answers.add(hit)
+    assert answers == {True, False}
+    # A moving obstacle (one oncoming): row k of the plan meets it where it is k · dt later.
+    moving = [PlannerObstacle(s_m=40.0, d_m=0.0, length_m=4.5, width_m=1.8, speed_mps=-10.0),
+              PlannerObstacle(s_m=20.0, d_m=-1.0, length_m=4.5, width_m=1.8, speed_mps=8.0)]
+    moving_answers = set()
+    for x in _random_plans(rng, 200):
+        hit = planned_obstacle_hit(x, moving, TRUCK, 0.1)
+        assert hit == (planned_obstacle_clearance_m(x, moving, TRUCK, 0.1) < 0.0)
+        moving_answers.add(hit)
+    assert moving_answers == {True, False}
+    x = next(_random_plans(rng, 1))
+    x[:, State.d] = np.nan
+    assert planned_obstacle_hit(x, obstacles, TRUCK) is False
+    assert planned_obstacle_hit(x, [], TRUCK) is False
 
 
 @pytest.mark.slow

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mufusion.metrics.criticality import criticality_summary
 from mufusion.sim.events import ERROR_EVENTS, EventKind
 from mufusion.sim.log import RunLog
 
@@ -101,6 +102,13 @@ class RunMetrics:
         Cycles the vehicle's wheel-slip control (ABS, TCS) ran, both axles.
     slip_control_active_s
         Time with the slip control modulating either axle's torque [s].
+    min_time_to_collision_s, min_time_to_brake_s
+        Smallest time to collision and time to brake over the run [s] (along the path, constant
+        velocities; braking at ``λ μ g``): :mod:`mufusion.metrics.criticality`, docs/metrics.md.
+        ``None`` without an obstacle ahead in the path that the vehicle closes in on.
+    max_required_decel_mps2, max_required_decel_over_mu_g, max_required_decel_over_mu_hat_g
+        Largest deceleration a collision-free outcome required [m/s²], and its largest ratio to
+        ``μ g`` (true μ under the vehicle) and to ``μ̂ g`` (the planner's estimate there).
     start_speed_mps, start_lateral_offset_m, start_heading_error_rad
         The state the run started from (its first tick): the scenario's, or the draw of its
         ``perturbation`` (:func:`mufusion.scenarios.config.perturbed`). ``None`` in records
@@ -149,6 +157,11 @@ class RunMetrics:
     wheel_lock_within_abs_cycle: bool | None = None
     slip_control_cycles: int = 0
     slip_control_active_s: float = 0.0
+    min_time_to_collision_s: float | None = None
+    min_time_to_brake_s: float | None = None
+    max_required_decel_mps2: float | None = None
+    max_required_decel_over_mu_g: float | None = None
+    max_required_decel_over_mu_hat_g: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {k: _clean(v) for k, v in asdict(self).items()}
@@ -235,6 +248,7 @@ def compute_metrics(log: RunLog) -> RunMetrics:
         start_lateral_offset_m=float(ts["d_m"].iloc[0]),
         start_heading_error_rad=float(ts["dpsi_rad"].iloc[0]),
         **_wheels(ts, 1.0 / log.meta.rates.controller_hz),
+        **criticality_summary(log),
     )
 
 

@@ -33,6 +33,8 @@ TABLE_COLUMNS: tuple[TableColumn, ...] = (
     TableColumn("spun", "spun", "yes/no", terminal=False),
     TableColumn("utilization_vs_gt", "util vs GT %", "percent"),
     TableColumn("max_force_excess", "F excess %", "percent", terminal=False),
+    TableColumn("min_time_to_collision_s", "TTC s", terminal=False),
+    TableColumn("max_required_decel_over_mu_g", "a_req/μg", terminal=False),
     TableColumn("fallbacks", "fallbacks", "number", terminal=False),
 )
 """Columns of the outcome table (summary.json has the full names and every metric)."""

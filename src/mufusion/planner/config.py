@@ -80,12 +80,36 @@ class PlausibilityLimits:
 
 @dataclass(frozen=True)
 class PlannerObstacle:
-    """An obstacle in road coordinates: centre ``(s_m, d_m)``, extent ``length_m × width_m``."""
+    """An obstacle in road coordinates: centre ``(s_m, d_m)``, extent ``length_m × width_m``.
+
+    ``s_m`` is where the centre is at the planning step's time; ``speed_mps`` is its constant
+    speed along the path (negative: oncoming; 0, the default: static), so stage ``k`` of a plan
+    sees it at ``s_m + speed_mps · k · dt`` (:meth:`s_at_stages`).
+    """
 
     s_m: float
     d_m: float
     length_m: float
     width_m: float
+    speed_mps: float = 0.0
+
+    def s_at_stages(self, s_shape: tuple[int, ...], dt_s: float) -> np.ndarray | float:
+        """The centre's predicted progress [m] at stages ``1..N`` (axis 0 of ``s_shape``).
+
+        A static obstacle's is the float ``s_m`` (so its corridor stays what it was, bit for
+        bit); a moving one's an array broadcastable to ``s_shape``.
+
+        Examples
+        --------
+        >>> PlannerObstacle(50.0, 0.0, 4.5, 1.8, speed_mps=10.0).s_at_stages((3,), 0.1).tolist()
+        [51.0, 52.0, 53.0]
+        >>> PlannerObstacle(50.0, 0.0, 4.5, 1.8).s_at_stages((3,), 0.1)
+        50.0
+        """
+        if self.speed_mps == 0.0:
+            return self.s_m
+        times = dt_s * np.arange(1, s_shape[0] + 1, dtype=float)
+        return self.s_m + self.speed_mps * times.reshape((-1,) + (1,) * (len(s_shape) - 1))
 
 
 @dataclass(frozen=True)

@@ -164,6 +164,7 @@ def lateral_corridor(
     params: VehicleParams,
     margin_m: float,
     curvature_1pm: np.ndarray | None = None,
+    dt_s: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Bounds on the reference point's ``d`` per stage 1..N, shape ``(N,)`` each.
 
@@ -178,6 +179,8 @@ def lateral_corridor(
     overlapping the vehicle's footprint at the guess's predicted ``s_k`` closes the side opposite
     to the guess's ``d_k`` (pass left if the guess is left of the obstacle's centre), which keeps
     the problem convex, unless only the other side has room (:func:`~.passing.passing_left`).
+    A moving obstacle is where it is predicted at each stage's time ``k · dt_s``
+    (:meth:`PlannerObstacle.s_at_stages`).
     """
     s_k = guess_states[1:, State.s]
     d_k = guess_states[1:, State.d]
@@ -202,7 +205,8 @@ def lateral_corridor(
     mid = 0.5 * (lo + hi)
     lo, hi = np.minimum(lo, mid), np.maximum(hi, mid)
     for ob in obstacles:
-        overlap = np.abs(s_k - ob.s_m) < half_len + 0.5 * ob.length_m + margin_m
+        s_ob = ob.s_at_stages(s_k.shape, dt_s)
+        overlap = np.abs(s_k - s_ob) < half_len + 0.5 * ob.length_m + margin_m
         clear = 0.5 * ob.width_m + half_w + margin_m
         left = passing_left(d_k, ob.d_m, clear, lo, hi)
         lo = np.where(overlap & left, np.maximum(lo, ob.d_m + clear), lo)

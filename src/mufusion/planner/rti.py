@@ -115,7 +115,7 @@ def iterate(
                                  cfg.utilization_factor, cfg.stiffness_table)
         d_lo, d_hi = lateral_corridor(
             guess_x, problem.obstacles, problem.lane_d_min_m, problem.lane_d_max_m, par,
-            cfg.obstacle_margin_m, curvature_of_s(guess_x[1:, State.s]),
+            cfg.obstacle_margin_m, curvature_of_s(guess_x[1:, State.s]), cfg.dt_s,
         )
         yref, weights = tracking_reference(
             cfg, stage.curvature_1pm, stage.mu_hat, mode, float(x0[State.vx]),

@@ -130,6 +130,11 @@ class SanitizedFriction:
         except Exception as exc:  # a broken friction source degrades, never raises
             _log.warning("friction estimate unusable (%r); sanitising every stage", exc)
             raw = np.full(s.shape, np.nan)
+        if raw.size and MU_MIN <= raw.min() and raw.max() <= MU_MAX:
+            # sanitize_mu's usual case, without its call (the sampling roll-outs ask 40 times
+            # per planning step).
+            self.last_count = 0
+            return raw.copy()
         mu, self.last_count = sanitize_mu(raw, s, self._previous, self._floor)
         return mu
 

@@ -62,13 +62,19 @@ def violation_m(
     lane_d_max_m: float,
     params: VehicleParams,
     margin_m: float,
+    dt_s: float = 0.0,
 ) -> np.ndarray:
-    """Summed footprint violation [m] of trajectories ``states (N+1, 6, M)`` → ``(M,)``."""
+    """Summed footprint violation [m] of trajectories ``states (N+1, 6, M)`` → ``(M,)``.
+
+    Stage ``k`` is ``k · dt_s`` after the first state: a moving obstacle is where it is then
+    (:meth:`~mufusion.planner.config.PlannerObstacle.s_at_stages`).
+    """
     s, d = states[1:, State.s], states[1:, State.d]
     half_w = 0.5 * params.width_m
     total = np.maximum(lane_d_min_m - d, 0.0) + np.maximum(d - lane_d_max_m, 0.0)
     for ob in obstacles:
-        overlap = np.abs(s - ob.s_m) < 0.5 * params.length_m + 0.5 * ob.length_m + margin_m
+        reach = 0.5 * params.length_m + 0.5 * ob.length_m + margin_m
+        overlap = np.abs(s - ob.s_at_stages(s.shape, dt_s)) < reach
         clear = 0.5 * ob.width_m + half_w + margin_m
         total = total + np.where(overlap, np.maximum(clear - np.abs(d - ob.d_m), 0.0), 0.0)
     return total.sum(axis=0)
@@ -271,10 +277,20 @@ def candidate_rollouts(
                 "lacks (reinstall with `pip install -e .`)"
             ) from exc
 
-        def stiffness_of(rear_load_n: np.ndarray, mu: np.ndarray) -> np.ndarray:
-            return rear_cornering_stiffness_n_per_rad(
-                params, rear_load_n, utilization_factor, mu_hat=mu, table=stiffness_table
-            )
+        stiffness_of: Callable[[np.ndarray, np.ndarray], np.ndarray]
+        if stiffness_table is None:
+            # The vehicle's tire: the stiffness is its load times a factor that μ̂ does not
+            # change, computed once here instead of at each of the 40 steps (factor · 1 = the
+            # factor, so each step's product is the one the full call makes).
+            per_load = rear_cornering_stiffness_n_per_rad(params, 1.0, utilization_factor)
+
+            def stiffness_of(rear_load_n: np.ndarray, mu: np.ndarray) -> np.ndarray:
+                return per_load * rear_load_n
+        else:
+            def stiffness_of(rear_load_n: np.ndarray, mu: np.ndarray) -> np.ndarray:
+                return rear_cornering_stiffness_n_per_rad(
+                    params, rear_load_n, utilization_factor, mu_hat=mu, table=stiffness_table
+                )
 
         rollouts(
             xs, us, np.ascontiguousarray(d_t, dtype=float),
@@ -350,7 +366,8 @@ def sampled_guess(
     """
     try:
         shifted_violation = float(violation_m(
-            guess_x[:, :, None], obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m
+            guess_x[:, :, None], obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m,
+            cfg.dt_s,
         )[0])
         if continuing and shifted_violation <= sc.trigger_violation_m:
             return guess_x, guess_u, False
@@ -367,7 +384,7 @@ def sampled_guess(
             tracking = tracking_cost(both, v_ref, d_ref)
         tracking[0] *= SHIFTED_DISCOUNT
         cost = tracking + VIOLATION_WEIGHT * violation_m(
-            both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m
+            both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m, cfg.dt_s
         )
         cost = np.where(np.isfinite(cost), cost, np.inf)
         best = int(np.argmin(cost))

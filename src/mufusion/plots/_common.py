@@ -20,7 +20,7 @@ from matplotlib.patches import Polygon
 
 from mufusion.configurations import Configuration
 from mufusion.sim.log import RunLog
-from mufusion.sim.records import RunMeta
+from mufusion.sim.records import ObstacleTrace, RunMeta
 
 # One colour per configuration, the same in every figure.
 CONFIG_COLORS: dict[str, str] = {
@@ -139,6 +139,12 @@ def lane_width(meta: RunMeta) -> float:
     return meta.road.lane_width_m
 
 
+def opposing_width(meta: RunMeta) -> float:
+    """Width [m] of the run's opposing lane (the ego lane's unless the road says otherwise)."""
+    opposing = meta.road.opposing_lane_width_m
+    return meta.road.lane_width_m if opposing is None else opposing
+
+
 def friction_at(meta: RunMeta, s_m: np.ndarray) -> np.ndarray:
     """True μ at progress ``s_m``: piecewise constant, each sample holding until the next."""
     s_ref = np.asarray(meta.road.s_m, dtype=float)
@@ -166,7 +172,7 @@ def draw_road(ax: Axes, meta: RunMeta, centre_xy: tuple[float, float], radius_m:
     if keep.sum() < 2:
         return None
     right = _offset(meta, -w / 2, keep)
-    left = _offset(meta, 3 * w / 2, keep)
+    left = _offset(meta, w / 2 + opposing_width(meta), keep)
     quads = [
         np.array([right[i], right[i + 1], left[i + 1], left[i]]) for i in range(len(right) - 1)
     ]
@@ -177,20 +183,38 @@ def draw_road(ax: Axes, meta: RunMeta, centre_xy: tuple[float, float], radius_m:
         linewidths=0.3, zorder=0,
     )
     ax.add_collection(surface)
-    centre = _offset(meta, w / 2, keep)
     ax.plot(right[:, 0], right[:, 1], color="0.25", lw=1.2, zorder=1)
     ax.plot(left[:, 0], left[:, 1], color="0.25", lw=1.2, zorder=1)
-    ax.plot(centre[:, 0], centre[:, 1], color="gold", lw=1.3, ls=(0, (4, 4)), zorder=1)
+    if opposing_width(meta) > 0.0:  # a one-way road has no centre marking
+        centre = _offset(meta, w / 2, keep)
+        ax.plot(centre[:, 0], centre[:, 1], color="gold", lw=1.3, ls=(0, (4, 4)), zorder=1)
     return surface
 
 
+def obstacle_corners_xy(meta: RunMeta, obstacle: ObstacleTrace, time_s: float) -> np.ndarray:
+    """Cartesian corners (4, 2) [m] of ``obstacle`` where it is at ``time_s`` [s].
+
+    A static obstacle's are the logged ones; a moving one is placed on the logged road samples
+    (interpolated) at :meth:`~mufusion.sim.records.ObstacleTrace.s_at_time`, aligned with the
+    road there.
+    """
+    if obstacle.speed_mps == 0.0:
+        return np.column_stack([obstacle.corners_x_m, obstacle.corners_y_m])
+    s, x, y, psi = _road_arrays(meta)
+    s_now = float(obstacle.s_at_time(time_s))
+    psi_now = float(np.interp(s_now, s, np.unwrap(psi)))
+    cx = float(np.interp(s_now, s, x)) - obstacle.d_m * np.sin(psi_now)
+    cy = float(np.interp(s_now, s, y)) + obstacle.d_m * np.cos(psi_now)
+    return footprint_xy(cx, cy, psi_now, obstacle.length_m, obstacle.width_m)
+
+
 def draw_obstacles(ax: Axes, meta: RunMeta, time_s: float) -> int:
-    """Draw the obstacles active at ``time_s``; returns how many were drawn."""
+    """Draw the obstacles active at ``time_s``, where they are then; returns how many."""
     drawn = 0
     for obstacle in meta.obstacles:
         if obstacle.appear_time_s is not None and time_s + 1e-9 < obstacle.appear_time_s:
             continue
-        corners = np.column_stack([obstacle.corners_x_m, obstacle.corners_y_m])
+        corners = obstacle_corners_xy(meta, obstacle, time_s)
         ax.add_patch(
             Polygon(corners, closed=True, facecolor="tab:red", edgecolor="darkred", lw=1.0,
                     zorder=3, gid="obstacle")

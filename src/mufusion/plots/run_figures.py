@@ -7,6 +7,7 @@ Fig. 4: P vs F at s = 0, 2, 18, 40 m).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -27,13 +28,27 @@ def _reachable_positions(log: RunLog, positions: Sequence[float]) -> list[float]
     return [p for p in positions if p <= travelled]
 
 
+SNAPSHOTS_PER_RUN = 4
+"""Top views of a run without a paper layout (a ``road``): the start and three more, evenly
+along the distance it travelled."""
+
+
+def _snapshot_positions(log: RunLog) -> Sequence[float]:
+    layout = default_variant(log.meta.scenario_name)
+    if layout is not None:
+        return layout.snapshot_positions_m
+    travelled = float(log.timeseries["s_m"].iloc[-1]) - log.meta.start_s_m
+    # Rounded down to a decimetre: the last one stays within the distance travelled.
+    return [math.floor(10.0 * travelled * k / (SNAPSHOTS_PER_RUN - 1)) / 10.0
+            for k in range(SNAPSHOTS_PER_RUN)]
+
+
 def single_run_figures(log: RunLog, out_dir: Path, *, gif: bool = True) -> dict[str, Path]:
     """Figures of one run: snapshots, lateral offset and speed, planned forces, the estimate."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    layout = default_variant(log.meta.scenario_name)
     t_c = log.meta.comparison_time_s
     figures: dict[str, Path] = {}
-    positions = _reachable_positions(log, layout.snapshot_positions_m)
+    positions = _reachable_positions(log, _snapshot_positions(log))
     if positions:
         figures["snapshots"] = plot_snapshots([log], positions, out_dir / "snapshots.png")
     figures["traces"] = plot_lateral_and_speed([log], out_dir / "lateral_speed.png")

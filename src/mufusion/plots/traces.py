@@ -12,6 +12,7 @@ from mufusion.plots._common import (
     config_color,
     config_name,
     lane_width,
+    opposing_width,
     require_logs,
     save_figure,
     start_s,
@@ -33,25 +34,32 @@ def build_traces_figure(logs: Sequence[RunLog]) -> Figure:
 
     meta = logs[0].meta
     w = lane_width(meta)
+    edge = w / 2 + opposing_width(meta)
     ax_d.axhline(-w / 2, color="0.3", lw=1.0, ls="-")
     ax_d.axhline(w / 2, color="0.3", lw=1.0, ls="--")
-    ax_d.axhline(3 * w / 2, color="0.3", lw=1.0, ls="-")
+    ax_d.axhline(edge, color="0.3", lw=1.0, ls="-")
     ax_d.axhline(0.0, color="0.7", lw=0.8, ls=":")
     # Label the boundaries at the right edge, inside the axes, so they never collide with data.
     for level, text in ((-w / 2, "ego lane edge"), (w / 2, "ego / opposing lane boundary"),
-                        (3 * w / 2, "road edge")):
+                        (edge, "road edge")):
         ax_d.annotate(text, xy=(1.0, level), xycoords=("axes fraction", "data"),
                       xytext=(-3, 2), textcoords="offset points", ha="right", va="bottom",
                       fontsize=7, color="0.3")
 
     obstacles = meta.obstacles
     s0 = start_s(logs[0])
+    t_end = max(float(log.timeseries["t_s"].iloc[-1]) for log in logs)
     for j, obstacle in enumerate(obstacles):
         length, width = obstacle.length_m, obstacle.width_m
         s_rel = obstacle.s_m - s0
+        # A moving obstacle sweeps its stretch of road over the run: drawn hatched, from where
+        # it starts to where it is at the run's end (its start marked as the position).
+        s_end = float(obstacle.s_at_time(t_end)) - s0
+        low, high = min(s_rel, s_end) - length / 2, max(s_rel, s_end) + length / 2
         ax_d.add_patch(
-            Rectangle((s_rel - length / 2, obstacle.d_m - width / 2), length, width,
+            Rectangle((low, obstacle.d_m - width / 2), high - low, width,
                       facecolor="tab:red", alpha=0.35, edgecolor="darkred",
+                      hatch="//" if obstacle.speed_mps else None,
                       label="obstacle (s-d footprint)" if j == 0 else None)
         )
         ax_v.axvline(s_rel, color="tab:red", lw=1.0, ls="--",

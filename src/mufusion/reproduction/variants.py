@@ -227,6 +227,8 @@ def variant(key: str) -> Variant:
         raise ValueError(f"variant must be one of {list(VARIANTS_BY_KEY)}, got {key!r}") from None
 
 
-def default_variant(scenario: str) -> Variant:
-    """The paper-settings variant of a scenario kind (figures of a single run use its layout)."""
-    return next(v for v in VARIANTS if v.scenario == scenario and v.overrides == PAPER_METHOD)
+def default_variant(scenario: str) -> Variant | None:
+    """The paper-settings variant of a scenario kind (figures of a single run use its layout);
+    None for a kind the paper has no variant of (a ``road``)."""
+    return next(
+        (v for v in VARIANTS if v.scenario == scenario and v.overrides == PAPER_METHOD), None)

@@ -4,6 +4,7 @@ from mufusion.road.friction import DEFAULT_LANE_WIDTH_M, FrictionMap
 from mufusion.road.geometry import (
     rectangle_corner_points,
     rectangle_corners,
+    rectangles_overlap,
     signed_clearance_m,
     signed_clearance_points,
 )
@@ -54,6 +55,7 @@ __all__ = [
     "opposing_lane_depth_m",
     "rectangle_corner_points",
     "rectangle_corners",
+    "rectangles_overlap",
     "road_margin_m",
     "signed_clearance_m",
     "signed_clearance_points",

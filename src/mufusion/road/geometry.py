@@ -52,21 +52,27 @@ def _point_segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) ->
     return np.linalg.norm(points - closest, axis=-1)
 
 
+def _axis_overlap(a: np.ndarray, b: np.ndarray, of_b: bool, edge: int) -> np.ndarray:
+    """Overlap of the projections of ``a`` and ``b`` onto the normal of edge ``edge`` (0 or 1)
+    of ``b`` (``of_b``) or of ``a``; ≤ 0 where that axis separates them."""
+    poly = b if of_b else a
+    direction = poly[..., edge + 1, :] - poly[..., edge, :]
+    normal = np.stack([-direction[..., 1], direction[..., 0]], axis=-1)
+    normal = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+    pa = np.sum(a * normal[..., None, :], axis=-1)
+    pb = np.sum(b * normal[..., None, :], axis=-1)
+    return np.minimum(pa.max(axis=-1), pb.max(axis=-1)) - np.maximum(pa.min(axis=-1),
+                                                                      pb.min(axis=-1))
+
+
+_SAT_AXES = ((False, 0), (False, 1), (True, 0), (True, 1))
+"""The separating-axis test's axes: both edge normals of the first rectangle, then the second's."""
+
+
 def _penetration(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Smallest projection overlap over the edge normals of both rectangles (SAT); ≤ 0 if apart."""
-    overlaps = []
-    for poly in (a, b):
-        for edge in (0, 1):
-            direction = poly[..., edge + 1, :] - poly[..., edge, :]
-            normal = np.stack([-direction[..., 1], direction[..., 0]], axis=-1)
-            normal = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
-            pa = np.sum(a * normal[..., None, :], axis=-1)
-            pb = np.sum(b * normal[..., None, :], axis=-1)
-            overlaps.append(
-                np.minimum(pa.max(axis=-1), pb.max(axis=-1))
-                - np.maximum(pa.min(axis=-1), pb.min(axis=-1))
-            )
-    return np.min(np.stack(overlaps), axis=0)
+    return np.min(np.stack([_axis_overlap(a, b, of_b, edge) for of_b, edge in _SAT_AXES]),
+                  axis=0)
 
 
 def signed_clearance_m(corners_a: np.ndarray, corners_b: np.ndarray) -> np.ndarray:
@@ -100,6 +106,32 @@ def signed_clearance_m(corners_a: np.ndarray, corners_b: np.ndarray) -> np.ndarr
     distance = np.minimum(d_ab.min(axis=(-2, -1)), d_ba.min(axis=(-2, -1)))
     penetration = _penetration(a, b)
     return np.where(penetration > 0.0, -penetration, distance)
+
+
+def rectangles_overlap(corners_a: np.ndarray, corners_b: np.ndarray) -> np.ndarray:
+    """Whether pairs of rectangles overlap (batch shapes broadcast): exactly where
+    :func:`signed_clearance_m` is negative, for finite corners, without its distances.
+
+    Examples
+    --------
+    >>> a = rectangle_corners(0.0, 0.0, 0.0, 2.0, 2.0)
+    >>> bool(rectangles_overlap(a, rectangle_corners(1.5, 0.0, 0.0, 2.0, 2.0)))
+    True
+    >>> bool(rectangles_overlap(a, rectangle_corners(2.0, 0.0, 0.0, 2.0, 2.0)))  # touching
+    False
+    """
+    a, b = np.broadcast_arrays(np.asarray(corners_a, float), np.asarray(corners_b, float))
+    batch = a.shape[:-2]
+    a, b = a.reshape(-1, 4, 2), b.reshape(-1, 4, 2)
+    # The penetration is positive where every axis overlaps: the pairs an axis separates are
+    # dropped before the next (each pair's overlaps are computed as _penetration computes them).
+    rows = np.arange(len(a))
+    for of_b, edge in _SAT_AXES:
+        if rows.size:
+            rows = rows[_axis_overlap(a[rows], b[rows], of_b, edge) > 0.0]
+    overlap = np.zeros(len(a), dtype=bool)
+    overlap[rows] = True
+    return overlap.reshape(batch)
 
 
 # Plain-float versions for one rectangle pair at a time: the closed loop checks one footprint per

@@ -1,9 +1,11 @@
 """Ego and opposing lane (right-hand traffic) and footprint-based lane checks.
 
 The reference path is the ego lane centre; the ego lane is ``|d| ≤ w/2``; the opposing lane lies
-to its left, ``w/2 < d ≤ 3w/2``; the road is both lanes, ``−w/2 ≤ d ≤ 3w/2``. A footprint is a
-``length × width`` rectangle centred at the given Frenet pose; its corners are placed exactly in
-the Cartesian plane and projected back onto the path, so the checks stay exact in curves.
+to its left, ``w/2 < d ≤ w/2 + w_o`` (``w_o``: its width, ``w`` unless given; 0 on a one-way
+road); the road is both lanes, ``−w/2 ≤ d ≤ w/2 + w_o`` (``3w/2`` with equal lanes). A footprint
+is a ``length × width`` rectangle centred at the given Frenet pose; its corners are placed
+exactly in the Cartesian plane and projected back onto the path, so the checks stay exact in
+curves.
 
 The graded quantities (:func:`lane_margin_m`, :func:`opposing_lane_depth_m`,
 :func:`road_margin_m`) are pure functions of the corners' offsets ``d``; the boolean checks are
@@ -120,11 +122,21 @@ def opposing_lane_depth_m(
     return np.maximum(0.0, np.max(d, axis=-1) - 0.5 * lane_width_m)
 
 
-def road_margin_m(corner_d_m: np.ndarray | list[float], lane_width_m: float) -> np.ndarray:
-    """Smallest signed distance of the corners to the road's outer edges (``−w/2``, ``3w/2``) [m].
+def _far_edge_m(lane_width_m: float, opposing_width_m: float | None) -> float:
+    # w/2 + w is 1.5 w to the last bit (both round the same exact sum once).
+    return 0.5 * lane_width_m + (lane_width_m if opposing_width_m is None else opposing_width_m)
+
+
+def road_margin_m(
+    corner_d_m: np.ndarray | list[float], lane_width_m: float,
+    opposing_width_m: float | None = None,
+) -> np.ndarray:
+    """Smallest signed distance of the corners to the road's outer edges (``−w/2`` and
+    ``w/2 + w_o``, ``3w/2`` with equal lanes) [m].
 
     Positive when every corner is on the road, negative (minus the deepest corner's distance
-    beyond the edge) when one is off it.
+    beyond the edge) when one is off it. ``opposing_width_m`` is the opposing lane's width
+    ``w_o`` (None: ``lane_width_m``).
 
     Examples
     --------
@@ -132,7 +144,8 @@ def road_margin_m(corner_d_m: np.ndarray | list[float], lane_width_m: float) -> 
     -0.25
     """
     d = _offsets(corner_d_m, lane_width_m)
-    return np.min(np.minimum(d + 0.5 * lane_width_m, 1.5 * lane_width_m - d), axis=-1)
+    far = _far_edge_m(lane_width_m, opposing_width_m)
+    return np.min(np.minimum(d + 0.5 * lane_width_m, far - d), axis=-1)
 
 
 @dataclass(frozen=True)
@@ -161,7 +174,9 @@ class LaneMargins:
         return self.road_margin_m < 0.0
 
 
-def footprint_lane_margins(corner_d_m: Sequence[float], lane_width_m: float) -> LaneMargins:
+def footprint_lane_margins(
+    corner_d_m: Sequence[float], lane_width_m: float, opposing_width_m: float | None = None
+) -> LaneMargins:
     """:func:`lane_margin_m`, :func:`opposing_lane_depth_m` and :func:`road_margin_m` of one
     footprint, in plain floats (the closed loop's per-tick check; equal to the array functions).
 
@@ -171,6 +186,8 @@ def footprint_lane_margins(corner_d_m: Sequence[float], lane_width_m: float) -> 
         Lateral offsets of the footprint's corners [m].
     lane_width_m
         Lane width ``w`` [m] (not validated here: the road checked it).
+    opposing_width_m
+        The opposing lane's width [m]; None: ``lane_width_m``.
 
     Examples
     --------
@@ -179,7 +196,7 @@ def footprint_lane_margins(corner_d_m: Sequence[float], lane_width_m: float) -> 
     (-0.25, 0.25, 2.25, True, False)
     """
     half = 0.5 * lane_width_m
-    far = 1.5 * lane_width_m
+    far = _far_edge_m(lane_width_m, opposing_width_m)
     return LaneMargins(
         lane_margin_m=min(half - abs(d) for d in corner_d_m),
         opposing_depth_m=max(0.0, max(corner_d_m) - half),
@@ -229,7 +246,8 @@ def left_road(
     length_m: float,
     width_m: float,
     lane_width_m: float,
+    opposing_width_m: float | None = None,
 ) -> np.ndarray:
-    """True where any footprint corner is off both lanes (``d < −w/2`` or ``d > 3w/2``)."""
+    """True where any footprint corner is off both lanes (``d < −w/2`` or ``d > w/2 + w_o``)."""
     d = footprint_corner_offsets_m(path, s_m, d_m, dpsi_rad, length_m, width_m)
-    return road_margin_m(d, lane_width_m) < 0.0
+    return road_margin_m(d, lane_width_m, opposing_width_m) < 0.0

@@ -19,7 +19,7 @@ from mufusion.road.path import ReferencePath
 
 @dataclass(frozen=True)
 class Obstacle:
-    """A static rectangular obstacle and its trigger.
+    """A rectangular obstacle, its trigger and its constant speed along the path.
 
     Attributes
     ----------
@@ -119,9 +119,13 @@ def obstacle_active_at(obstacle: Obstacle, ego_s_m: float, time_s: float) -> boo
     )
 
 
-def obstacle_corners(obstacle: Obstacle, path: ReferencePath) -> np.ndarray:
-    """Cartesian corners of the obstacle, shape ``(4, 2)``."""
-    x, y, heading = path.to_cartesian(obstacle.s_m, obstacle.d_m, 0.0)
+def obstacle_corners(obstacle: Obstacle, path: ReferencePath, time_s: float = 0.0) -> np.ndarray:
+    """Cartesian corners of the obstacle where it is at ``time_s`` [s], shape ``(4, 2)``.
+
+    A moving obstacle's centre is at :meth:`Obstacle.s_at_time`; a static one's is ``s_m`` at
+    any time (``s_m + 0·t`` is ``s_m`` exactly).
+    """
+    x, y, heading = path.to_cartesian(obstacle.s_at_time(time_s), obstacle.d_m, 0.0)
     return rectangle_corners(x, y, heading, obstacle.length_m, obstacle.width_m)
 
 
@@ -133,6 +137,7 @@ def footprint_clearance_m(
     heading_rad: np.ndarray | float,
     length_m: float,
     width_m: float,
+    time_s: float = 0.0,
 ) -> np.ndarray:
     """Signed clearance [m] between ego footprints (Cartesian poses) and the obstacle.
 
@@ -144,6 +149,8 @@ def footprint_clearance_m(
         Footprint centre [m] and heading [rad]; broadcast to a batch shape ``B``.
     length_m, width_m
         Footprint size [m].
+    time_s
+        The instant [s]: a moving obstacle is where it is then (:meth:`Obstacle.s_at_time`).
 
     Returns
     -------
@@ -151,4 +158,4 @@ def footprint_clearance_m(
         Shape ``B``: > 0 distance when apart, < 0 minus the penetration depth when colliding.
     """
     ego = rectangle_corners(x_m, y_m, heading_rad, length_m, width_m)
-    return signed_clearance_m(ego, obstacle_corners(obstacle, path))
+    return signed_clearance_m(ego, obstacle_corners(obstacle, path, time_s))

@@ -23,22 +23,36 @@ class Road:
     path
         Ego lane centre line.
     lane_width_m
-        Width of each lane [m]; the opposing lane lies left of the ego lane.
+        Width of the ego lane [m] (and of the opposing lane unless ``opposing_lane_width_m``
+        says otherwise); the opposing lane lies left of the ego lane.
     friction
         True friction map.
     obstacles
         Obstacles with their triggers.
+    opposing_lane_width_m
+        Width of the opposing lane [m]; None: ``lane_width_m`` (two equal lanes); 0: a one-way
+        road whose left edge is the ego lane's.
     """
 
     path: ReferencePath
     lane_width_m: float = DEFAULT_LANE_WIDTH_M
     friction: FrictionMap = field(default_factory=lambda: FrictionMap.uniform(1.0))
     obstacles: tuple[Obstacle, ...] = ()
+    opposing_lane_width_m: float | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.lane_width_m) and self.lane_width_m > 0.0):
             raise ValueError(f"lane_width_m must be finite and > 0, got {self.lane_width_m!r}")
+        opposing = self.opposing_lane_width_m
+        if opposing is not None and not (math.isfinite(opposing) and opposing >= 0.0):
+            raise ValueError(f"opposing_lane_width_m must be finite and >= 0, got {opposing!r}")
         object.__setattr__(self, "obstacles", tuple(self.obstacles))
+
+    @property
+    def opposing_width_m(self) -> float:
+        """Width of the opposing lane [m] (``lane_width_m`` unless set, 0 on a one-way road)."""
+        return self.lane_width_m if self.opposing_lane_width_m is None else (
+            self.opposing_lane_width_m)
 
     @property
     def length_m(self) -> float:
@@ -80,7 +94,8 @@ class Road:
 
     def left_road(self, s_m, d_m, dpsi_rad, length_m: float, width_m: float) -> np.ndarray:
         """Any footprint corner off both lanes."""
-        return left_road(self.path, s_m, d_m, dpsi_rad, length_m, width_m, self.lane_width_m)
+        return left_road(self.path, s_m, d_m, dpsi_rad, length_m, width_m, self.lane_width_m,
+                         self.opposing_lane_width_m)
 
 
 def straight_road(

@@ -1,4 +1,5 @@
-"""Built-in scenarios (``turn``, ``popup``) as validated TOML files, their loader and runner."""
+"""Built-in scenarios (``turn``, ``popup``) as validated TOML files, the ``road`` kind (any
+road), their loader and runner."""
 
 from mufusion.scenarios.config import (
     SCENARIO_KINDS,
@@ -12,11 +13,13 @@ from mufusion.scenarios.loading import (
     load_scenario,
     scenario_from_dict,
 )
+from mufusion.scenarios.road_kind import RoadScenario
 
 __all__ = [
     "BUILTIN_SCENARIOS",
     "SCENARIO_KINDS",
     "PopupScenario",
+    "RoadScenario",
     "ScenarioConfig",
     "TurnScenario",
     "apply_overrides",

@@ -1,10 +1,11 @@
 """Scenario configuration: one validated (pydantic) schema per scenario kind.
 
-A scenario is a :class:`TurnScenario` or a :class:`PopupScenario`, told apart by ``name``; each
+A scenario is a :class:`TurnScenario`, a :class:`PopupScenario` or a
+:class:`~mufusion.scenarios.road_kind.RoadScenario` (any road), told apart by ``name``; each
 kind has only the keys it uses (a turn has no obstacle, a pop-up no turn), so a key that would do
 nothing is an error, never silently ignored. Each kind builds its own road
-(:meth:`TurnScenario.build_road`) and says where the planner may drive, so no code branches on
-the scenario's name.
+(:meth:`TurnScenario.build_road`), says where the vehicle starts on it (``start_s_m``) and where
+the planner may drive (``drivable_d_m``), so no code branches on the scenario's name.
 """
 
 from __future__ import annotations
@@ -12,122 +13,30 @@ from __future__ import annotations
 from typing import Annotated, Literal, TypeVar
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field
 
-from mufusion.planner.safety import SafetySettings
 from mufusion.road import FrictionMap, Obstacle, Road, straight_road, turn_road
+from mufusion.scenarios.base import Scenario
+from mufusion.scenarios.road_kind import RoadScenario
 from mufusion.scenarios.sections import (
     FOOTPRINT_MARGIN_M,
-    EstimationConfig,
     InitialPerturbation,
     NonNegFloat,
     ObstacleConfig,
-    PlannerSettings,
     RoadConfig,
-    SimSettings,
     TurnFriction,
     TurnGeometry,
     UniformFriction,
-    VehicleName,
-    _Strict,
 )
-from mufusion.scenarios.shared_section import SharedSection
-from mufusion.sim.faults import Fault
-from mufusion.sim.settings import LaneRecoverySettings, LoopRates, ProbingSettings
 from mufusion.vehicle.params import VehicleParams
 
+_S = TypeVar("_S", bound=Scenario)
 
-class _Scenario(_Strict):
-    """What every scenario kind has: vehicle, speeds, duration, seed, estimation, solver."""
 
-    description: str = ""
-    vehicle: VehicleName = "truck"
-    initial_speed_mps: Annotated[float, Field(gt=0.0, le=40.0)] = 12.0
-    initial_lateral_offset_m: Annotated[float, Field(ge=-1.0, le=1.0, allow_inf_nan=False)] = 0.0
-    """Start offset of the centre of gravity from the lane centre [m], left positive."""
-    initial_heading_error_rad: Annotated[
-        float, Field(ge=-0.2, le=0.2, allow_inf_nan=False)
-    ] = 0.0
-    """Start heading relative to the lane [rad], left positive."""
-    perturbation: InitialPerturbation = InitialPerturbation()
-    """Seeded draws around the initial state (speed, offset, heading); none by default."""
-    reference_speed_mps: Annotated[float, Field(gt=0.0, le=40.0)] | None = None
-    """Cruise speed the planner tracks; defaults to the initial speed."""
-    duration_s: Annotated[float, Field(gt=0.0, le=120.0)] = 10.0
-    seed: Annotated[int, Field(ge=0)] = 0
-    comparison_time_s: NonNegFloat = 0.0
-    """Instant whose plan and estimate are compared between configurations (the paper's
-    Fig. 3k/4k): planned-force utilisation against GT is measured there."""
+class _PaperScenario(Scenario):
+    """The paper's two kinds: a ``[road]`` of a straight approach and one lane width."""
+
     road: RoadConfig = RoadConfig()
-    estimation: EstimationConfig = EstimationConfig()
-    planner: PlannerSettings = PlannerSettings()
-    sim: SimSettings = SimSettings()
-    faults: list[Fault] = Field(default_factory=list)
-    """Faults to inject (``[[faults]]`` tables: kind, start_s, duration_s, delay_s)."""
-    safety: SafetySettings = SafetySettings()
-    """How the loop reacts to missing, stale or failing parts (:mod:`mufusion.sim.faults`)."""
-    probing: ProbingSettings = ProbingSettings()
-    """Active friction probing (beyond the paper, :mod:`mufusion.sim.supervision`)."""
-    shared: SharedSection = SharedSection()
-    """Shared friction reports, read by F+shared and F-safe+shared (decision 0060)."""
-    lane_recovery: LaneRecoverySettings = LaneRecoverySettings()
-    """Relaxing μ̂ towards the posterior mean when no friction-limited plan keeps the lane."""
-
-    @model_validator(mode="after")
-    def _check_common(self) -> _Scenario:
-        for i, fault in enumerate(self.faults):
-            if fault.start_s >= self.duration_s:
-                raise ValueError(
-                    f"faults.{i}.start_s must be before duration_s = {self.duration_s} s "
-                    f"(a fault after the end does nothing), got {fault.start_s}"
-                )
-        pert = self.perturbation
-        if self.initial_speed_mps - pert.speed_mps <= 0.0:
-            raise ValueError(
-                f"perturbation.speed_mps must be below initial_speed_mps = "
-                f"{self.initial_speed_mps} m/s (a draw would start at rest or reversing), "
-                f"got {pert.speed_mps}"
-            )
-        if abs(self.initial_lateral_offset_m) + pert.lateral_offset_m > 1.0:
-            raise ValueError(
-                "perturbation.lateral_offset_m plus |initial_lateral_offset_m| must be at most "
-                f"1.0 m (the start stays near the lane centre), got {pert.lateral_offset_m} + "
-                f"{abs(self.initial_lateral_offset_m)}"
-            )
-        if abs(self.initial_heading_error_rad) + pert.heading_rad > 0.2:
-            raise ValueError(
-                "perturbation.heading_rad plus |initial_heading_error_rad| must be at most "
-                f"0.2 rad, got {pert.heading_rad} + {abs(self.initial_heading_error_rad)}"
-            )
-        if self.comparison_time_s >= self.duration_s:
-            raise ValueError(
-                f"duration_s must exceed comparison_time_s = {self.comparison_time_s} s "
-                f"(the instant the runs are compared at), got {self.duration_s}"
-            )
-        if self.planner.stiffness == "from_mu_hat" and self.sim.tires == "default":
-            raise ValueError(
-                "planner.stiffness = 'from_mu_hat' follows μ̂ through the plant's tire table, but "
-                "sim.tires = 'default' has a stiffness independent of μ; set sim.tires to "
-                "'authors' or 'authors_interpolated' (or planner.stiffness = 'fixed')"
-            )
-        try:
-            self.rates()
-        except ValueError as err:  # re-raised with the scenario's key names
-            raise ValueError(
-                str(err)
-                .replace("plant_hz", "sim.plant_rate_hz")
-                .replace("controller_hz", "sim.controller_rate_hz")
-                .replace("planner_hz", "planner.rate_hz")
-            ) from None
-        return self
-
-    @property
-    def cruise_speed_mps(self) -> float:
-        return self.reference_speed_mps or self.initial_speed_mps
-
-    def rates(self) -> LoopRates:
-        """The loop's component rates."""
-        return LoopRates(self.sim.plant_rate_hz, self.sim.controller_rate_hz, self.planner.rate_hz)
 
     @property
     def start_s_m(self) -> float:
@@ -135,10 +44,7 @@ class _Scenario(_Strict):
         return self.road.approach_m
 
 
-_S = TypeVar("_S", bound=_Scenario)
-
-
-class TurnScenario(_Scenario):
+class TurnScenario(_PaperScenario):
     """Paper scenario 1: a turn on low friction after high friction; keep the lane."""
 
     name: Literal["turn"]
@@ -168,7 +74,7 @@ class TurnScenario(_Scenario):
         return -0.5 * w, 0.5 * w
 
 
-class PopupScenario(_Scenario):
+class PopupScenario(_PaperScenario):
     """Paper scenario 2: an obstacle appears ahead in the lane; avoid it."""
 
     name: Literal["popup"]
@@ -202,19 +108,23 @@ class PopupScenario(_Scenario):
         return -0.5 * w, 1.5 * w
 
 
-ScenarioConfig = Annotated[TurnScenario | PopupScenario, Field(discriminator="name")]
-"""A validated scenario of either kind."""
+AnyScenario = TurnScenario | PopupScenario | RoadScenario
+"""A validated scenario of any kind."""
 
-SCENARIO_KINDS: dict[str, type[TurnScenario] | type[PopupScenario]] = {
+ScenarioConfig = Annotated[AnyScenario, Field(discriminator="name")]
+"""A validated scenario of any kind, told apart by ``name`` (pydantic's tagged union)."""
+
+SCENARIO_KINDS: dict[str, type[TurnScenario] | type[PopupScenario] | type[RoadScenario]] = {
     "turn": TurnScenario,
     "popup": PopupScenario,
+    "road": RoadScenario,
 }
 
 
 def perturbed(cfg: _S, rng: np.random.Generator) -> _S:
     """The scenario with its initial-state perturbation drawn from ``rng`` and applied.
 
-    Returns ``cfg`` itself when :attr:`_Scenario.perturbation` is all zero (nothing is drawn).
+    Returns ``cfg`` itself when :attr:`Scenario.perturbation` is all zero (nothing is drawn).
     Otherwise three uniform draws, always in the order speed, lateral offset, heading (a zero
     half-width scales its draw to nothing, so the others do not depend on it), move
     ``initial_speed_mps``, ``initial_lateral_offset_m`` and ``initial_heading_error_rad``; the
@@ -251,9 +161,7 @@ def perturbed(cfg: _S, rng: np.random.Generator) -> _S:
     })
 
 
-def planner_lane_bounds_m(
-    cfg: TurnScenario | PopupScenario, params: VehicleParams
-) -> tuple[float, float]:
+def planner_lane_bounds_m(cfg: AnyScenario, params: VehicleParams) -> tuple[float, float]:
     """Bounds on the planner's lateral offset: the drivable band's edges shrunk by half the
     vehicle width (TAMP framework) and by :data:`FOOTPRINT_MARGIN_M`."""
     lo, hi = cfg.drivable_d_m()

@@ -17,7 +17,7 @@ from typing import Any
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from mufusion.planner.safety import SafetySettings
-from mufusion.scenarios.config import SCENARIO_KINDS, PopupScenario, ScenarioConfig, TurnScenario
+from mufusion.scenarios.config import SCENARIO_KINDS, AnyScenario, ScenarioConfig
 from mufusion.sim.faults import Fault
 from mufusion.sim.settings import LaneRecoverySettings, ProbingSettings
 
@@ -26,8 +26,13 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-BUILTIN_SCENARIOS: tuple[str, ...] = tuple(SCENARIO_KINDS)
-_ADAPTER: TypeAdapter[TurnScenario | PopupScenario] = TypeAdapter(ScenarioConfig)
+BUILTIN_SCENARIOS: tuple[str, ...] = tuple(
+    kind for kind in SCENARIO_KINDS
+    if resources.files("mufusion.scenarios").joinpath(f"{kind}.toml").is_file()
+)
+"""The kinds that ship a scenario file of their own (``turn``, ``popup``; a ``road`` needs the
+user's)."""
+_ADAPTER: TypeAdapter[AnyScenario] = TypeAdapter(ScenarioConfig)
 
 
 def _format_validation_error(err: ValidationError, source: str) -> str:
@@ -44,7 +49,7 @@ def _format_validation_error(err: ValidationError, source: str) -> str:
 
 def scenario_from_dict(
     data: dict[str, Any], source: str = "<dict>"
-) -> TurnScenario | PopupScenario:
+) -> AnyScenario:
     """Validate a scenario mapping.
 
     Raises
@@ -188,7 +193,7 @@ _DATACLASS_NAMES: dict[str, type] = {
 
 def load_scenario(
     name_or_path: str | Path, overrides: list[str] | None = None
-) -> TurnScenario | PopupScenario:
+) -> AnyScenario:
     """Load a built-in scenario (``"turn"``, ``"popup"``) or a TOML file, with overrides applied.
 
     Raises

@@ -41,12 +41,13 @@ from mufusion.planner import (
 )
 from mufusion.road import Obstacle, Road, obstacle_corners
 from mufusion.scenarios.config import (
+    AnyScenario,
     PopupScenario,
-    TurnScenario,
     perturbed,
     planner_lane_bounds_m,
 )
 from mufusion.scenarios.feasibility import classify_scenario
+from mufusion.scenarios.road_kind import RoadScenario
 from mufusion.scenarios.shared_section import scenario_inbox
 from mufusion.sim.components import Controller, Planner
 from mufusion.sim.log import RunLog
@@ -65,7 +66,7 @@ from mufusion.sim.world import World
 from mufusion.vehicle.params import VehicleParams, vehicle_preset
 from mufusion.vehicle.plant import Plant, initial_state
 
-Scenario = TurnScenario | PopupScenario
+Scenario = AnyScenario
 
 WARMUP_PLANNING_STEPS = 10
 """Plans made at the start state, before the obstacle appears (the planner's warm start)."""
@@ -193,7 +194,8 @@ def build_loop(
         rates=rates,
         reference_speed_mps=cfg.cruise_speed_mps,
         lane_bounds_m=(config.lane_d_min_m, config.lane_d_max_m),
-        emergency_on_obstacle=isinstance(cfg, PopupScenario) and cfg.emergency_on_obstacle,
+        emergency_on_obstacle=(
+            isinstance(cfg, PopupScenario | RoadScenario) and cfg.emergency_on_obstacle),
         faults=tuple(cfg.faults),
         safety=cfg.safety,
         probing=cfg.probing,
@@ -304,7 +306,9 @@ def _blas_controller() -> ThreadpoolController:
 
 
 def _planner_obstacle(o: Obstacle) -> PlannerObstacle:
-    return PlannerObstacle(s_m=o.s_m, d_m=o.d_m, length_m=o.length_m, width_m=o.width_m)
+    # ``o`` is placed at the planning step's time (World.planner_obstacles).
+    return PlannerObstacle(s_m=o.s_m, d_m=o.d_m, length_m=o.length_m, width_m=o.width_m,
+                           speed_mps=o.speed_mps)
 
 
 def run_meta(
@@ -324,7 +328,8 @@ def run_meta(
             ObstacleTrace(
                 s_m=o.s_m, d_m=o.d_m, length_m=o.length_m, width_m=o.width_m,
                 appear_time_s=o.appear_at_time_s, corners_x_m=corners[:, 0].tolist(),
-                corners_y_m=corners[:, 1].tolist(),
+                corners_y_m=corners[:, 1].tolist(), speed_mps=o.speed_mps,
+                appear_ego_s_m=o.appear_at_ego_s_m,
             )
         )
     rates = cfg.rates()
@@ -350,6 +355,7 @@ def run_meta(
             curvature_1pm=np.round(road.curvature(s), 8).tolist(),
             mu=np.asarray(road.mu_at(s), float).tolist(),
             lane_width_m=road.lane_width_m,
+            opposing_lane_width_m=road.opposing_lane_width_m,
         ),
         obstacles=obstacles,
         planner=PlannerSettings(

@@ -20,8 +20,10 @@ from mufusion.sim.settings import LaneRecoverySettings
 from mufusion.sim.supervision import (
     planned_footprint_violation_m,
     planned_obstacle_clearance_m,
+    planned_obstacle_hit,
     plausible_estimate,
-    relaxed_estimate,
+    relaxation_gain,
+    relaxed_by,
 )
 from mufusion.sim.supervisor import PlanningContext, Supervisor
 from mufusion.vehicle.params import VehicleParams
@@ -92,6 +94,14 @@ class LaneRecovery(Supervisor):
         """The relaxation adopted at the last step, held into the next (0: none)."""
         self.recoveries: list[Recovery] = []
         """Each step's outcome where lane recovery acted, in order."""
+        self._gain: tuple[FrictionEstimate, np.ndarray | None] | None = None
+
+    def _relaxed(self, estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
+        """:func:`~mufusion.sim.supervision.relaxed_estimate`, with the gain computed once per
+        estimate (a planning step relaxes the same one by up to five fractions)."""
+        if self._gain is None or self._gain[0] is not estimate:
+            self._gain = (estimate, relaxation_gain(estimate))
+        return relaxed_by(estimate, self._gain[1], alpha)
 
     def adjust_inputs(
         self, ctx: PlanningContext, mode: PlanningMode, estimate: FrictionEstimate
@@ -100,7 +110,7 @@ class LaneRecovery(Supervisor):
         if not self.settings.enabled or ctx.minimal_risk or mode == "evade":
             return estimate
         if self.alpha > 0.0:
-            relaxed = relaxed_estimate(estimate, self.alpha)
+            relaxed = self._relaxed(estimate, self.alpha)
             if relaxed is not None:
                 return relaxed
         self.alpha = 0.0
@@ -125,10 +135,10 @@ class LaneRecovery(Supervisor):
         held = self.alpha
         # Without a posterior (GT, L, P) there is nothing to relax: skip the footprint check,
         # which would run at every planning step.
-        if relaxed_estimate(estimate, 1.0) is None:
+        if self._relaxed(estimate, 1.0) is None:
             self.alpha = 0.0
             return plan, estimate
-        planned_with = relaxed_estimate(estimate, held) if held > 0.0 else estimate
+        planned_with = self._relaxed(estimate, held) if held > 0.0 else estimate
         assert planned_with is not None
         tolerance = self.settings.violation_tolerance_m
         before = self.footprint_violation_m(plan)
@@ -142,7 +152,7 @@ class LaneRecovery(Supervisor):
             # guarantee of the lower bound returns as soon as the lane allows.
             lower = alphas[alphas.index(held) - 1]
             memory = self.planner.memory
-            candidate_estimate = relaxed_estimate(estimate, lower) if lower > 0.0 else estimate
+            candidate_estimate = self._relaxed(estimate, lower) if lower > 0.0 else estimate
             assert candidate_estimate is not None
             candidate = ctx.plan(candidate_estimate, mode)
             if not candidate.fallback and self.footprint_violation_m(candidate) <= tolerance:
@@ -162,12 +172,13 @@ class LaneRecovery(Supervisor):
         # A plan predicted to hit an obstacle is never preferred to one predicted to pass it,
         # however much further the latter leaves the lane (evading, the road band).
         def rank(candidate: Plan, violation: float) -> tuple[bool, float]:
-            hits = planned_obstacle_clearance_m(candidate.states, ctx.obstacles, self.params) < 0.0
+            hits = planned_obstacle_hit(candidate.states, ctx.obstacles, self.params,
+                                        candidate.dt_s)
             return (hits, np.inf if candidate.fallback else violation)
 
         best = (rank(plan, before), before, plan, planned_with, held, self.planner.memory)
         for alpha in (a for a in alphas if a > held):
-            relaxed = relaxed_estimate(estimate, alpha)
+            relaxed = self._relaxed(estimate, alpha)
             assert relaxed is not None
             candidate = ctx.plan(relaxed, mode)
             violation = self.footprint_violation_m(candidate)
@@ -211,7 +222,8 @@ class LaneRecovery(Supervisor):
         top = plausible_estimate(estimate)
         if top is not None:
             check = ctx.plan(top, "evade")
-            gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params)
+            gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params,
+                                               check.dt_s)
             if not check.fallback and gap < 0.0:
                 brake = ctx.plan(estimate, "emergency")
                 if not brake.fallback:

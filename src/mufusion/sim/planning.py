@@ -11,7 +11,12 @@ import numpy as np
 from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan, PlannerObstacle
 from mufusion.sim.components import Planner, PlanningMode
-from mufusion.sim.obstacle_response import ObstacleResponse, obstacle_mode
+from mufusion.sim.obstacle_response import (
+    ObstacleResponse,
+    follow_speed_mps,
+    obstacle_mode,
+    traffic_role,
+)
 from mufusion.sim.supervisor import PlanningContext
 from mufusion.sim.world import World
 from mufusion.vehicle.params import VehicleParams
@@ -105,9 +110,23 @@ class Planning:
         obstacles: Sequence[PlannerObstacle],
         mode: PlanningMode,
     ) -> Plan:
-        """One planner step with ``estimate``'s μ̂ on its grid ahead of ``s_anchor_m``."""
+        """One planner step with ``estimate``'s μ̂ on its grid ahead of ``s_anchor_m``.
+
+        Behind a lead vehicle the cruise speed is capped by
+        :func:`~mufusion.sim.obstacle_response.follow_speed_mps`; while cruising (the lead is
+        followed, docs/decisions/0058) the lead is not one of the obstacles the corridor passes:
+        the plan stays behind it, as a stop stays in front of an obstacle.
+        """
         grid_abs = s_anchor_m + self.grid_m
         mu_hat_grid = np.asarray(estimate.mu_hat, dtype=float)
+        reference_speed_mps = self.reference_speed_mps
+        if any(o.speed_mps > 0.0 for o in obstacles):
+            reference_speed_mps = min(reference_speed_mps, follow_speed_mps(
+                obstacles, xf, self.grid_m, mu_hat_grid, self.params, self.obstacle_response))
+            if mode == "cruise":
+                obstacles = [o for o in obstacles if o.speed_mps <= 0.0 or traffic_role(
+                    o, xf, self.grid_m, mu_hat_grid, self.params, self.obstacle_response)
+                    != "lead"]
 
         def mu_hat_of_s(s: np.ndarray) -> np.ndarray:
             # Beyond the camera's range the last estimate is held (TAMP framework).
@@ -120,7 +139,7 @@ class Planning:
             mu_hat_of_s=mu_hat_of_s,
             obstacles=obstacles,
             mode=mode,
-            reference_speed_mps=self.reference_speed_mps,
+            reference_speed_mps=reference_speed_mps,
             reference_d_m=0.0,
             lane_d_min_m=self.lane_bounds_m[0],
             lane_d_max_m=self.lane_bounds_m[1],

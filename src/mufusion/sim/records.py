@@ -247,10 +247,16 @@ class RoadTrace(_Meta):
     curvature_1pm: list[float]
     mu: list[float]
     lane_width_m: float
+    opposing_lane_width_m: float | None = None
+    """The opposing lane's width [m]; None: ``lane_width_m`` (0: a one-way road)."""
 
 
 class ObstacleTrace(_Meta):
-    """An obstacle in road coordinates and its Cartesian corners."""
+    """An obstacle in road coordinates and its Cartesian corners (at time 0).
+
+    A moving obstacle's centre is at ``s_m + speed_mps · t`` at time ``t`` (:meth:`s_at_time`):
+    its position per tick follows from these two numbers and is not logged.
+    """
 
     s_m: float
     d_m: float
@@ -260,6 +266,16 @@ class ObstacleTrace(_Meta):
     """When it appears [s]; None when it is there from the start or appears by position."""
     corners_x_m: list[float]
     corners_y_m: list[float]
+    speed_mps: float = 0.0
+    """Constant speed along the path [m/s] (negative: oncoming; 0: static, and in records
+    written before obstacles moved)."""
+    appear_ego_s_m: float | None = None
+    """The ego progress [m] at which it appears (None: no such trigger, or a record written
+    before it was kept)."""
+
+    def s_at_time(self, time_s: np.ndarray | float) -> np.ndarray | float:
+        """The centre's progress [m] at ``time_s`` [s]."""
+        return self.s_m + self.speed_mps * time_s
 
 
 class PlannerSettings(_Meta):

@@ -85,7 +85,7 @@ import numpy as np
 from mufusion.configurations import MU_HAT_MAX, FrictionEstimate
 from mufusion.fusion import Z95, local_surface_bound
 from mufusion.planner import PlannerObstacle
-from mufusion.road.geometry import rectangle_corners, signed_clearance_m
+from mufusion.road.geometry import rectangle_corners, rectangles_overlap, signed_clearance_m
 
 # The settings live apart (the scenario schema reads them); importers of this module keep them.
 from mufusion.sim.settings import LaneRecoverySettings as LaneRecoverySettings
@@ -149,13 +149,15 @@ def planned_obstacle_clearance_m(
     states: np.ndarray,
     obstacles: Sequence[PlannerObstacle],
     params: VehicleParams,
+    dt_s: float = 0.0,
 ) -> float:
     """Smallest gap between a plan's predicted footprints and the obstacles [m], negative when
     they overlap (minus the depth); ``inf`` without obstacles.
 
     Footprints and obstacles are rectangles in road coordinates ``(s, d)``, the footprint
     centred ``params.body_centre_ahead_of_cog_m`` ahead of the reference point along the heading
-    error: exact on a straight road, the planner's own frame on a curved one.
+    error: exact on a straight road, the planner's own frame on a curved one. Row ``k`` of
+    ``states`` is ``k · dt_s`` after the first: a moving obstacle is where it is then.
 
     Examples
     --------
@@ -174,11 +176,67 @@ def planned_obstacle_clearance_m(
     ahead = params.body_centre_ahead_of_cog_m
     ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
                             params.length_m, params.width_m)
-    return min(
-        float(np.min(signed_clearance_m(
-            ego, rectangle_corners(ob.s_m, ob.d_m, 0.0, ob.length_m, ob.width_m))))
-        for ob in obstacles
-    )
+    return min(float(np.min(signed_clearance_m(ego, box)))
+               for box in _obstacle_corners(obstacles, len(s), dt_s))
+
+
+def _obstacle_corners(
+    obstacles: Sequence[PlannerObstacle], rows: int, dt_s: float
+) -> list[np.ndarray]:
+    """Each obstacle's corners in ``(s, d)``: ``(4, 2)``, or ``(rows, 4, 2)`` for a moving one,
+    row ``k`` where it is ``k · dt_s`` after the first."""
+    times_s = dt_s * np.arange(rows, dtype=float)
+    return [rectangle_corners(ob.s_m + ob.speed_mps * times_s if ob.speed_mps else ob.s_m,
+                              ob.d_m, 0.0, ob.length_m, ob.width_m)
+            for ob in obstacles]
+
+
+def planned_obstacle_hit(
+    states: np.ndarray,
+    obstacles: Sequence[PlannerObstacle],
+    params: VehicleParams,
+    dt_s: float = 0.0,
+) -> bool:
+    """Whether a plan's predicted footprints overlap an obstacle: the same answer as
+    ``planned_obstacle_clearance_m(states, obstacles, params, dt_s) < 0.0``, at a fraction of
+    its cost.
+
+    Only where a footprint's bounding box overlaps an obstacle's (the obstacles are axis-aligned
+    in ``(s, d)``) can the rectangles overlap: the separating-axis test of
+    :func:`~mufusion.road.geometry.signed_clearance_m` projects onto the obstacle's edge normals,
+    the coordinate axes, and these projections are the boxes' extents bit for bit, so where the
+    boxes do not overlap its penetration is ≤ 0 and the clearance the distance, ≥ 0. The other
+    states are judged by that penetration itself
+    (:func:`~mufusion.road.geometry.rectangles_overlap`: the clearance is negative exactly where
+    it is positive). Non-finite input takes the full computation.
+
+    Examples
+    --------
+    >>> from mufusion.planner import PlannerObstacle
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> x = np.zeros((2, 6)); x[:, State.s] = [0.0, 20.0]
+    >>> planned_obstacle_hit(x, [PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)],
+    ...                      TRUCK)
+    True
+    """
+    if not obstacles:
+        return False
+    x = np.asarray(states, dtype=float)
+    boxes = _obstacle_corners(obstacles, len(x), dt_s)
+    if not (np.all(np.isfinite(x)) and all(np.all(np.isfinite(box)) for box in boxes)):
+        return planned_obstacle_clearance_m(x, obstacles, params, dt_s) < 0.0
+    s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
+    ahead = params.body_centre_ahead_of_cog_m
+    ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
+                            params.length_m, params.width_m)
+    ego_lo, ego_hi = ego.min(axis=-2), ego.max(axis=-2)
+    for box in boxes:
+        overlap = np.minimum(ego_hi, box.max(axis=-2)) - np.maximum(ego_lo, box.min(axis=-2))
+        near = np.all(overlap > 0.0, axis=-1)
+        if np.any(near) and bool(np.any(
+                rectangles_overlap(ego[near], box[near] if box.ndim == 3 else box))):
+            return True
+    return False
 
 
 def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
@@ -198,6 +256,13 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     >>> np.round(relaxed_estimate(est, 0.5).mu_hat, 6).tolist()
     [0.3, 0.4]
     """
+    return relaxed_by(estimate, relaxation_gain(estimate), alpha)
+
+
+def relaxation_gain(estimate: FrictionEstimate) -> np.ndarray | None:
+    """How far :func:`relaxed_estimate` moves μ̂ at ``alpha = 1``: the target less μ̂, never
+    negative; None without a posterior or when the mean adds nothing. A caller that relaxes one
+    estimate by several fractions computes it once (:func:`relaxed_by`)."""
     if estimate.fused is None:
         return None
     mu_hat = np.asarray(estimate.mu_hat, dtype=float)
@@ -207,7 +272,18 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     gain = np.maximum(target - mu_hat, 0.0)
     if not np.any(gain > 1e-9):
         return None
-    return dataclasses.replace(estimate, mu_hat=mu_hat + alpha * gain)
+    return gain
+
+
+def relaxed_by(
+    estimate: FrictionEstimate, gain: np.ndarray | None, alpha: float
+) -> FrictionEstimate | None:
+    """``estimate`` with μ̂ raised by ``alpha`` times its :func:`relaxation_gain` ``gain``
+    (None for a gain of None): :func:`relaxed_estimate` without computing the gain again."""
+    if gain is None:
+        return None
+    return dataclasses.replace(
+        estimate, mu_hat=np.asarray(estimate.mu_hat, dtype=float) + alpha * gain)
 
 
 def plausible_estimate(estimate: FrictionEstimate) -> FrictionEstimate | None:

@@ -7,6 +7,7 @@ The footprint is the vehicle's ``length × width`` rectangle centred midway betw
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -18,6 +19,7 @@ from mufusion.road import (
     FrictionTracker,
     Obstacle,
     PointTracker,
+    ReferencePath,
     Road,
     footprint_lane_margins,
     obstacle_active_at,
@@ -104,7 +106,9 @@ class World:
     road
         Reference path, lanes, true friction, obstacles.
     to_planner_obstacle
-        Converts an active road obstacle into the planner's obstacle description.
+        Converts an active road obstacle into the planner's obstacle description. It is given
+        the obstacle as it is at the planning step's time (:func:`obstacle_now`: ``s_m`` where
+        its centre is then, ``speed_mps`` its speed along the path).
     """
 
     road: Road
@@ -121,10 +125,10 @@ class World:
             FrictionTracker(path, self.road.friction), FrictionTracker(path, self.road.friction),
             tuple(PointTracker(path) for _ in range(4)),
         ))
-        # Obstacles do not move: their corners once, as plain floats for the per-tick clearance.
+        # Static obstacles' corners once, as plain floats for the per-tick clearance (a moving
+        # one's are placed at each tick: _points_at).
         object.__setattr__(self, "_obstacle_points", tuple(
-            tuple((float(x), float(y)) for x, y in obstacle_corners(o, path).tolist())
-            for o in self.road.obstacles
+            _corner_points(o, path, 0.0) for o in self.road.obstacles
         ))
 
     @property
@@ -184,21 +188,29 @@ class World:
                 self._trackers.rear_axle.mu_at(rear_x, rear_y))
 
     def active_obstacles(self, t_s: float, s_ego_m: float) -> list[Obstacle]:
+        """The obstacles present at ``t_s`` [s] for ego progress ``s_ego_m`` [m] (as given: a
+        moving one's ``s_m`` is its progress at time 0)."""
         return [o for o in self.road.obstacles if obstacle_active_at(o, s_ego_m, t_s)]
 
     def planner_obstacles(
         self, t_s: float, s_ego_m: float, behind_m: float = float("inf")
     ) -> Sequence[Any]:
-        """The active obstacles in the planner's description.
+        """The active obstacles in the planner's description, where they are at ``t_s`` [s].
 
         Obstacles whose far end lies more than ``behind_m`` [m] behind ``s_ego_m`` are left out:
         once passed they no longer shape the plan (nor keep it in its evasive mode).
         """
+        now = (obstacle_now(o, t_s) for o in self.active_obstacles(t_s, s_ego_m))
         return [
-            self.to_planner_obstacle(o)
-            for o in self.active_obstacles(t_s, s_ego_m)
+            self.to_planner_obstacle(o) for o in now
             if o.s_m + 0.5 * o.length_m >= s_ego_m - behind_m
         ]
+
+    def _points_at(self, index: int, obstacle: Obstacle, t_s: float) -> tuple[Point, ...]:
+        """The corners of obstacle ``index`` at ``t_s`` [s] as plain floats."""
+        if not obstacle.moving:
+            return self._obstacle_points[index]
+        return _corner_points(obstacle, self.road.path, t_s)
 
     def footprint_status(
         self,
@@ -225,16 +237,17 @@ class World:
         passed = False
         any_active = False
         s_c: float | None = None
-        for obstacle, points in zip(self.road.obstacles, self._obstacle_points, strict=True):
+        for index, obstacle in enumerate(self.road.obstacles):
             if not obstacle_active_at(obstacle, s_ego_m, t_s):
                 continue
             any_active = True
+            points = self._points_at(index, obstacle, t_s)
             clearance = min(clearance, signed_clearance_points(corners, points))
             if s_c is None:  # the footprint's progress matters only next to an obstacle
                 s_c = self._trackers.centre.to_frenet(cx, cy, psi)[0]
-            passed |= s_c - 0.5 * length > obstacle.s_m + 0.5 * obstacle.length_m
+            passed |= s_c - 0.5 * length > obstacle.s_at_time(t_s) + 0.5 * obstacle.length_m
         mu_f, mu_r = self._mu_under_axles(pose, params)
-        lanes = footprint_lane_margins(corner_d, lane_width)
+        lanes = footprint_lane_margins(corner_d, lane_width, self.road.opposing_lane_width_m)
         return FootprintStatus(
             mu_front=mu_f,
             mu_rear=mu_r,
@@ -250,3 +263,22 @@ class World:
             road_margin_m=lanes.road_margin_m,
             off_road=lanes.off_road,
         )
+
+
+def obstacle_now(obstacle: Obstacle, time_s: float) -> Obstacle:
+    """``obstacle`` as it is at ``time_s`` [s]: its ``s_m`` the centre's progress then.
+
+    A static obstacle comes back unchanged (the same object).
+
+    Examples
+    --------
+    >>> obstacle_now(Obstacle(100.0, 3.5, speed_mps=-10.0), 2.0).s_m
+    80.0
+    """
+    if not obstacle.moving:
+        return obstacle
+    return dataclasses.replace(obstacle, s_m=obstacle.s_at_time(time_s))
+
+
+def _corner_points(obstacle: Obstacle, path: ReferencePath, time_s: float) -> tuple[Point, ...]:
+    return tuple((float(x), float(y)) for x, y in obstacle_corners(obstacle, path, time_s).tolist())

@@ -152,11 +152,14 @@ def effective_radius_m(
     )
 
 
-def _assess(
+def line_limit(
     path: Literal["centreline", "outer", "cut"], radius_m: float, pieces: list[Piece],
     mu_of: FrictionOfS, breakpoints: tuple[float, ...], entry_speed_mps: float, lam: float,
     dead_time_s: float, max_decel_mps2: float,
 ) -> TurnLimit:
+    """The limit along one line of ``pieces`` from the vehicle's start (s = 0): the backward
+    profile, the highest entry speed cruising through the dead time, the braking point and the
+    margin at ``entry_speed_mps``; ``radius_m`` is reported as the line's radius."""
     s, u, limit = backward_profile(pieces, mu_of, breakpoints, lam, max_decel_mps2)
     reach = np.minimum.accumulate(u)  # v² allowed for cruising from the start up to s
     v_max = max_entry_speed_mps(s, reach, dead_time_s, math.sqrt(u[0]))
@@ -286,7 +289,7 @@ def turn_feasibility(
     def assess_line(path: Literal["centreline", "outer", "cut"], radius: float,
                     pieces: list[Piece], mu_of: FrictionOfS,
                     points: tuple[float, ...]) -> TurnLimit:
-        return _assess(path, radius, pieces, mu_of, points, entry_speed_mps,
+        return line_limit(path, radius, pieces, mu_of, points, entry_speed_mps,
                        utilization_factor, dead_time_s, max_decel_mps2)
 
     def friction_on(pieces: list[Piece]) -> tuple[FrictionOfS, tuple[float, ...]]:
