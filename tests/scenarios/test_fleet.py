@@ -3,6 +3,8 @@ configuration the vehicles ignore them; the command refuses bad input before any
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from typer.testing import CliRunner
@@ -80,3 +82,16 @@ def test_study_summary_counts_and_closes_gaps():
     assert s["car F-safe+shared fresh"]["closure_at_least_half"]["successes"] == 1
     assert s["car F-safe+shared wrong"]["closure_at_least_half"]["successes"] == 0
     assert s["car F-safe+shared old"]["not_worse_than_baseline"]["rate"] == 1.0
+
+
+def test_fleet_command_writes_logs_summary_and_figures(tmp_path):
+    sets = [a for o in OVERRIDES for a in ("--set", o)]
+    result = CliRunner().invoke(app, ["fleet", "turn", "--vehicles", "2", *sets, "-o",
+                                      str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "vehicle-2" / "log").is_dir()
+    assert (tmp_path / "band_last.png").stat().st_size > 0
+    assert (tmp_path / "first_vs_last.png").stat().st_size > 0
+    rows = json.loads((tmp_path / "summary.json").read_text())
+    assert rows[0]["reports_received"] == 0
+    assert rows[1]["reports_received"] > 0
