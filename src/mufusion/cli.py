@@ -58,7 +58,8 @@ def run(
             "--config",
             "-c",
             help="Friction estimate the planner uses: GT (ground truth), L (local only), "
-            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe), or your "
+            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe), F+shared / "
+            "F-safe+shared (also the [shared] reports file's reports), or your "
             "own as module:Class (imported from the current directory) or an entry point of "
             "mufusion.friction_sources.",
         ),
