@@ -11,14 +11,16 @@ import logging
 import signal
 import time
 from pathlib import Path
-from typing import Annotated, NoReturn
+from typing import Annotated
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
 from mufusion.cli_commonroad import import_commonroad
-from mufusion.cli_progress import print_table, progress_bar, run_specs
+from mufusion.cli_progress import console, print_table, progress_bar, run_specs
+from mufusion.cli_progress import fail as _fail
+from mufusion.cli_shared import calibrate_shared, fleet
 
 app = typer.Typer(
     name="mufusion",
@@ -30,8 +32,8 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-console = Console(stderr=True)
 app.command("import-commonroad")(import_commonroad)
+app.command()(fleet)  # `mufusion fleet` (cli_shared.py)
 
 
 @app.callback()
@@ -45,11 +47,6 @@ def _main(
     )
 
 
-def _fail(message: str) -> NoReturn:
-    console.print(f"[red]error:[/red] {message}")
-    raise typer.Exit(code=2)
-
-
 @app.command()
 def run(
     scenario: Annotated[
@@ -61,7 +58,8 @@ def run(
             "--config",
             "-c",
             help="Friction estimate the planner uses: GT (ground truth), L (local only), "
-            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe), or your "
+            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe), F+shared / "
+            "F-safe+shared (also the [shared] reports file's reports), or your "
             "own as module:Class (imported from the current directory) or an entry point of "
             "mufusion.friction_sources.",
         ),
@@ -333,6 +331,7 @@ def calibrate(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")] = Path(
         "results/calibration"
     ),
+    shared: Annotated[bool, typer.Option(help="With shared reports: by age, wrong share.")] = False,
 ) -> None:
     """Calibrate the fusion without a closed loop: random horizons (class layouts, errors within
     the declared margins, local estimate present or absent) fused in both modes; writes
@@ -352,6 +351,8 @@ def calibrate(
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         _fail(f"--out cannot be created: {err}")
+    if shared:
+        return calibrate_shared(horizons, seed, out)
     started = time.perf_counter()
     result = calibrate_fusion(np.random.default_rng(seed), n_horizons=horizons)
     elapsed = time.perf_counter() - started

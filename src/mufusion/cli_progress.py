@@ -1,14 +1,24 @@
-"""The command line's progress bar, its outcome table (printed in the terminal's width) and the
-fixed list of runs `reproduce` makes under that bar."""
+"""The command line's progress bar, its outcome table (printed in the terminal's width), the
+fixed list of runs `reproduce` makes under that bar, and the error exit every subcommand shares."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import NoReturn
 
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+console = Console(stderr=True)
+"""Where the command line reports progress and errors (stderr)."""
+
+
+def fail(message: str) -> NoReturn:
+    """Print ``message`` as an error and exit with code 2 (bad input, before any work)."""
+    console.print(f"[red]error:[/red] {message}")
+    raise typer.Exit(code=2)
 
 
 def progress_bar(console: Console) -> Progress:

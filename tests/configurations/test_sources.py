@@ -213,7 +213,8 @@ def test_mu_hat_is_finite_positive_on_the_grid(name, mu_near, mu_far, change_m, 
 @pytest.mark.parametrize(
     ("name", "kwargs", "match"),
     [
-        ("X", {}, r"configuration must be one of \['GT', 'L', 'P', 'F', 'F-safe'\]"),
+        ("X", {}, r"configuration must be one of \['GT', 'L', 'P', 'F', 'F-safe', 'F\+shared', "
+         r"'F-safe\+shared'\]"),
         ("F", {"local_error": "random"}, "local_error='random' needs"),
         ("P", {"predictive_error": "random"}, "predictive_error='random' needs"),
         ("F", {"predictive_error": "bad"}, "predictive_error must be one of"),

@@ -13,7 +13,7 @@ from typing import Annotated, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from mufusion.configurations import CONFIGURATION_NAMES
+from mufusion.configurations import STANDARD_CONFIGURATION_NAMES
 from mufusion.configurations.plugins import (
     CONTROLLERS,
     PLANNERS,
@@ -77,7 +77,9 @@ class CampaignFile(BaseModel):
 
     name: str = "campaign"
     scenarios: list[str] = Field(min_length=1)
-    configs: list[str] = Field(default_factory=lambda: list(CONFIGURATION_NAMES), min_length=1)
+    configs: list[str] = Field(
+        default_factory=lambda: list(STANDARD_CONFIGURATION_NAMES), min_length=1
+    )
     overrides: list[str] = Field(default_factory=list)
     grid: dict[str, list[GridEntry]] = Field(default_factory=dict)
     seeds: Annotated[int, Field(ge=1, le=MAX_SEEDS)] | None = None

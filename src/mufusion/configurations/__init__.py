@@ -1,4 +1,5 @@
-"""The friction sources the planner can drive on: GT, L, P, F and F-safe (paper Sec. IV-B).
+"""The friction sources the planner can drive on: GT, L, P, F and F-safe (paper Sec. IV-B), and
+F+shared and F-safe+shared (the fusion with other vehicles' reports, decision 0060).
 
 The layer between estimation and planning. A friction source reads a sensor frame
 (:mod:`mufusion.estimators.sensors`; never the true friction, except GT) and returns a
@@ -23,6 +24,8 @@ from mufusion.configurations.interface import (
 from mufusion.configurations.registry import (
     CONFIGURATION_NAMES,
     PAPER_CONFIGURATIONS,
+    STANDARD_CONFIGURATION_NAMES,
+    STANDARD_CONFIGURATIONS,
     Configuration,
 )
 
@@ -39,6 +42,8 @@ __all__ = [
     "MU_HAT_MAX",
     "MU_HAT_MIN",
     "PAPER_CONFIGURATIONS",
+    "STANDARD_CONFIGURATIONS",
+    "STANDARD_CONFIGURATION_NAMES",
     "Configuration",
     "EmulatedConfiguration",
     "FrictionConfiguration",

@@ -23,6 +23,8 @@ class Configuration(str, Enum):
     P = "P"
     F = "F"
     F_SAFE = "F-safe"
+    F_SHARED = "F+shared"
+    F_SAFE_SHARED = "F-safe+shared"
 
     @property
     def label(self) -> str:
@@ -41,8 +43,18 @@ class Configuration(str, Enum):
 
     @property
     def in_paper(self) -> bool:
-        """Whether the paper evaluates this configuration (F-safe is ours)."""
-        return self is not Configuration.F_SAFE
+        """Whether the paper evaluates this configuration (F-safe and the shared ones are ours)."""
+        return self in (Configuration.GT, Configuration.L, Configuration.P, Configuration.F)
+
+    @property
+    def shares_reports(self) -> bool:
+        """Whether the fusion also reads shared reports of other vehicles (decision 0060)."""
+        return self in _WITHOUT_REPORTS
+
+    @property
+    def without_reports(self) -> Configuration:
+        """The same configuration without shared reports (itself if it reads none)."""
+        return _WITHOUT_REPORTS.get(self, self)
 
     @classmethod
     def parse(cls, name: str | Configuration) -> Configuration:
@@ -77,14 +89,31 @@ _DESCRIPTIONS: dict[Configuration, str] = {
     Configuration.P: "predictive only",
     Configuration.F: "fused, paper mode",
     Configuration.F_SAFE: "fused, safe mode",
+    Configuration.F_SHARED: "fused with shared reports, paper mode",
+    Configuration.F_SAFE_SHARED: "fused with shared reports, safe mode",
 }
 _FUSION_MODES: dict[Configuration, FusionMode] = {
     Configuration.F: "paper",
     Configuration.F_SAFE: "safe",
+    Configuration.F_SHARED: "paper",
+    Configuration.F_SAFE_SHARED: "safe",
+}
+_WITHOUT_REPORTS: dict[Configuration, Configuration] = {
+    Configuration.F_SHARED: Configuration.F,
+    Configuration.F_SAFE_SHARED: Configuration.F_SAFE,
 }
 
 CONFIGURATION_NAMES: tuple[str, ...] = tuple(c.value for c in Configuration)
-"""The names, in the paper's order: ``("GT", "L", "P", "F", "F-safe")``."""
+"""Every name: ``("GT", "L", "P", "F", "F-safe", "F+shared", "F-safe+shared")``."""
+
+STANDARD_CONFIGURATIONS: tuple[Configuration, ...] = tuple(
+    c for c in Configuration if not c.shares_reports
+)
+"""The configurations a single vehicle runs on its own sensors (GT, L, P, F, F-safe): the default
+set of campaigns and the reproduction. The shared ones need reports (a fleet or a reports file)."""
+
+STANDARD_CONFIGURATION_NAMES: tuple[str, ...] = tuple(c.value for c in STANDARD_CONFIGURATIONS)
+"""Their names: ``("GT", "L", "P", "F", "F-safe")``."""
 
 PAPER_CONFIGURATIONS: tuple[Configuration, ...] = tuple(c for c in Configuration if c.in_paper)
 """The configurations the paper evaluates."""

@@ -23,6 +23,10 @@ friction, except GT, which declares the truth channel and reads nothing else::
     (paper Sec. III).
 ``F-safe``
     As F with the fusion's ``mode="safe"`` (see :mod:`mufusion.fusion`).
+``F+shared``, ``F-safe+shared``
+    As F and F-safe, with the reports of other vehicles received so far as a third source
+    (decision 0060); the loop tells the source where it is (``locate``). Without reports they
+    are F and F-safe, bit for bit.
 
 The slip estimator reports at every step whichever configuration reads it, so the local value
 and its availability are logged for all of them. Each ``μ̂`` is finally clipped into
@@ -55,9 +59,22 @@ from mufusion.estimators import (
     SurfaceClass,
     validate_classes,
 )
+from mufusion.estimators.comm import ReportInbox
 from mufusion.estimators.sensor_model import SensorModel, make_sensor_model
 from mufusion.estimators.sensors import Channel, SensorFrame, TrueFriction
-from mufusion.fusion import PAPER_PRIOR, GPFusion, GPPrior, assemble_inputs
+from mufusion.fusion import (
+    DEFAULT_SHARED,
+    PAPER_PRIOR,
+    GPFusion,
+    GPPrior,
+    ReportData,
+    SharedSettings,
+    assemble_inputs,
+    report_data,
+)
+
+REPORT_WINDOW_SLACK_M = 10.0
+"""Reports this far behind the grid's start or beyond its end still enter the fusion [m]."""
 
 
 class FrictionConfiguration(FrictionEstimator):
@@ -129,7 +146,8 @@ class PredictiveOnly(FrictionConfiguration):
 
 
 class Fused(FrictionConfiguration):
-    """F / F-safe: camera and slip reports fused by GP regression (paper Sec. III)."""
+    """F / F-safe: camera and slip reports fused by GP regression (paper Sec. III); the shared
+    configurations also fuse the reports in ``inbox`` (decision 0060)."""
 
     channels = frozenset({Channel.CAMERA_CLASSES, Channel.CAMERA_MU})
 
@@ -139,16 +157,35 @@ class Fused(FrictionConfiguration):
         configuration: Configuration,
         prior: GPPrior = PAPER_PRIOR,
         s_local_m: float | None = None,
+        shared: SharedSettings = DEFAULT_SHARED,
+        inbox: ReportInbox | None = None,
     ) -> None:
         mode = configuration.fusion_mode
         if mode is None:
             raise ValueError(f"configuration {configuration.value!r} is not a fused one")
+        if inbox is not None and not configuration.shares_reports:
+            raise ValueError(f"configuration {configuration.value!r} reads no shared reports")
         self.configuration = configuration
         self.mode = mode
         self.prior = prior
         self.s_local_m = s_local_m
+        self.shared = shared
+        self.inbox = inbox
+        self._where: tuple[float, float] | None = None  # (t_s, s_ego_m) of the planning step
         # The fusion's cached kernel blocks are per evaluation grid; rebuilt if the grid changes.
         self._fusion: GPFusion | None = None
+
+    def locate(self, t_s: float, s_ego_m: float) -> None:
+        """Where the vehicle is on the map at the coming planning step (for the reports)."""
+        self._where = (float(t_s), float(s_ego_m))
+
+    def _reports(self, s: np.ndarray) -> ReportData | None:
+        if self.inbox is None or self._where is None:
+            return None
+        t_s, s_ego_m = self._where
+        window = (float(s[0]) - REPORT_WINDOW_SLACK_M, float(s[-1]) + REPORT_WINDOW_SLACK_M)
+        return report_data(self.inbox.at(t_s), t_now_s=t_s, s_ego_m=s_ego_m, prior=self.prior,
+                           settings=self.shared, window_m=window)
 
     def _fusion_on(self, s: np.ndarray) -> GPFusion:
         if self._fusion is None or not np.array_equal(self._fusion.s_eval_m, s):
@@ -171,7 +208,7 @@ class Fused(FrictionConfiguration):
             mode=self.mode,
             **extra,
         )
-        fused = self._fusion_on(s).step(data)
+        fused = self._fusion_on(s).step(data, self._reports(s))
         return FrictionEstimate(
             s_m=s, mu_hat=np.asarray(fused.mu_hat, dtype=float), local_available=slip.available,
             local_mu=slip.mu, fused=fused, data=data,
@@ -184,8 +221,11 @@ def make_estimator(
     classes: Sequence[SurfaceClass] = PAPER_CLASSES,
     length_scale_m: float | None = None,
     s_local_m: float | None = None,
+    shared: SharedSettings = DEFAULT_SHARED,
+    inbox: ReportInbox | None = None,
 ) -> FrictionConfiguration:
-    """One of the paper's estimators on the sensor frame (GT, L, P, F, F-safe).
+    """One of the paper's estimators on the sensor frame (GT, L, P, F, F-safe, and F+shared,
+    F-safe+shared with the reports of other vehicles).
 
     Parameters
     ----------
@@ -197,11 +237,16 @@ def make_estimator(
         GP kernel length scale [m]; None keeps the fusion's default prior.
     s_local_m : float, optional
         Reach ``s_l`` of the local estimate in the fusion input [m]; None keeps the default.
+    shared : SharedSettings
+        How the shared configurations treat reports (ageing, trust test, sender cap).
+    inbox : ReportInbox, optional
+        The reports a shared configuration receives; None: none (it is then F or F-safe).
 
     Raises
     ------
     ValueError
-        If ``name`` is unknown (the message lists the names) or a parameter is out of range.
+        If ``name`` is unknown (the message lists the names), a parameter is out of range, or
+        an ``inbox`` is given to a configuration that reads no reports.
     """
     configuration = Configuration.parse(name)
     table = validate_classes(classes)
@@ -218,7 +263,8 @@ def make_estimator(
         if not (math.isfinite(length_scale_m) and length_scale_m > 0.0):
             raise ValueError(f"length_scale_m must be finite and > 0 m, got {length_scale_m!r}")
         prior = dataclasses.replace(PAPER_PRIOR, length_scale_m=float(length_scale_m))
-    return Fused(configuration=configuration, prior=prior, s_local_m=s_local_m)
+    return Fused(configuration=configuration, prior=prior, s_local_m=s_local_m, shared=shared,
+                 inbox=inbox)
 
 
 class EmulatedConfiguration:

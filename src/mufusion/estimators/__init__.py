@@ -5,7 +5,10 @@ accuracy rather than implementing them; these are those emulations, as pure func
 arrays (:func:`predictive_estimate`, :func:`classify`) and one small stateful estimator that
 holds its latest value (:class:`LocalEstimator`, timed by a :class:`LocalTiming`). Together they
 are the vehicle's emulated sensors (:class:`SensorModel`), whose reports reach a friction source
-as a :class:`SensorFrame` (:mod:`mufusion.estimators.sensors`).
+as a :class:`SensorFrame` (:mod:`mufusion.estimators.sensors`). Reports shared by other vehicles
+or roadside units (:class:`FrictionReport`), how they travel (:class:`CommModel`) and how they can
+be wrong (:class:`WrongReports`) are in :mod:`~mufusion.estimators.shared`,
+:mod:`~mufusion.estimators.comm` and :mod:`~mufusion.estimators.misbehaviour`.
 """
 
 from mufusion.estimators.classes import (
@@ -17,6 +20,7 @@ from mufusion.estimators.classes import (
     classify,
     validate_classes,
 )
+from mufusion.estimators.comm import MESSAGE_KINDS, CommModel, transmit
 from mufusion.estimators.errors import ERROR_MODELS, ErrorModel, check_error_model
 from mufusion.estimators.local import (
     LOCAL_MAX_ERROR,
@@ -24,6 +28,7 @@ from mufusion.estimators.local import (
     LocalEstimate,
     LocalEstimator,
 )
+from mufusion.estimators.misbehaviour import WrongReports, corrupt
 from mufusion.estimators.predictive import (
     CAMERA_RANGE_M,
     PredictiveEstimate,
@@ -38,6 +43,7 @@ from mufusion.estimators.sensors import (
     TrueFriction,
     VehicleSignals,
 )
+from mufusion.estimators.shared import FrictionReport
 from mufusion.estimators.timing import (
     AUTHORS_LOCAL_TIMING,
     LOCAL_TIMINGS,
@@ -54,13 +60,16 @@ __all__ = [
     "ERROR_MODELS",
     "LOCAL_MAX_ERROR",
     "LOCAL_TIMINGS",
+    "MESSAGE_KINDS",
     "PAPER_CLASSES",
     "PAPER_LOCAL_TIMING",
     "SENSOR_CHANNELS",
     "UTILIZATION_THRESHOLD",
     "CameraReport",
     "Channel",
+    "CommModel",
     "ErrorModel",
+    "FrictionReport",
     "LocalEstimate",
     "LocalEstimator",
     "LocalTiming",
@@ -70,11 +79,14 @@ __all__ = [
     "SurfaceClass",
     "TrueFriction",
     "VehicleSignals",
+    "WrongReports",
     "check_error_model",
     "class_table",
     "classify",
+    "corrupt",
     "local_timing",
     "make_sensor_model",
     "predictive_estimate",
+    "transmit",
     "validate_classes",
 ]

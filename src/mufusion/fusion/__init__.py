@@ -10,10 +10,15 @@ See ``docs/fusion.md``. Modules, upstream first:
 * :mod:`~mufusion.fusion.engine`: ``PosteriorEngine``, the linear algebra and its caches;
 * :mod:`~mufusion.fusion.safe`: safe mode (grouped noise, hard-bound envelope);
 * :mod:`~mufusion.fusion.assembly`: ``assemble_inputs`` (and its batch form) and the grid;
+* :mod:`~mufusion.fusion.reports`: shared reports as input (``ReportData``, ``report_data``,
+  ``SharedSettings``: age, position error, sender cap);
+* :mod:`~mufusion.fusion.shared_fusion`: the fusion with reports (trust test, one-sided rule,
+  safe mode's hard bound with reports; decision 0060);
 * :mod:`~mufusion.fusion.core`: ``fuse``, ``GPFusion``; :mod:`~mufusion.fusion.batch`:
   ``fuse_batch``.
 """
 
+from mufusion.estimators.shared import DEFAULT_SHARED, SharedSettings
 from mufusion.fusion.assembly import (
     DEFAULT_GRID_M,
     DEFAULT_S_LOCAL_M,
@@ -49,10 +54,13 @@ from mufusion.fusion.prior import (
     Z95,
     GPPrior,
 )
+from mufusion.fusion.reports import ReportData, report_data
 from mufusion.fusion.safe import SHARED_ERROR_FRACTION
+from mufusion.fusion.shared_fusion import ReportScreen, screen_reports
 
 __all__ = [
     "DEFAULT_GRID_M",
+    "DEFAULT_SHARED",
     "DEFAULT_S_LOCAL_M",
     "GRID_STEP_M",
     "HORIZON_M",
@@ -77,10 +85,15 @@ __all__ = [
     "GPFusion",
     "GPPrior",
     "PosteriorEngine",
+    "ReportData",
+    "ReportScreen",
+    "SharedSettings",
     "assemble_inputs",
     "assemble_inputs_batch",
     "declared_upper_bound",
     "fuse",
     "fuse_batch",
     "local_surface_bound",
+    "report_data",
+    "screen_reports",
 ]

@@ -31,7 +31,9 @@ from mufusion.fusion.data import (
 )
 from mufusion.fusion.engine import PosteriorEngine, noise_sd_of
 from mufusion.fusion.prior import PAPER_PRIOR, Z95, GPPrior, check_prior
+from mufusion.fusion.reports import ReportData
 from mufusion.fusion.safe import safe_estimate
+from mufusion.fusion.shared_fusion import fuse_shared
 
 DEFAULT_ENGINE = PosteriorEngine(max_grids=16)
 """The engine behind :func:`fuse` and :func:`~mufusion.fusion.fuse_batch` (caches at most 16
@@ -44,8 +46,16 @@ def fuse_validated(
     data: FusionData,
     e: np.ndarray,
     mode: str,
+    reports: ReportData | None = None,
 ) -> FusedEstimate:
-    """The fused estimate from validated inputs (no checks: the public entry points did them)."""
+    """The fused estimate from validated inputs (no checks: the public entry points did them).
+
+    Without reports (None or none left) the result is the two-source fusion, bit for bit; with
+    them, :func:`~mufusion.fusion.shared_fusion.fuse_shared` on top of it.
+    """
+    if reports is not None and reports.size:
+        without = fuse_validated(engine, prior, data, e, mode)
+        return fuse_shared(engine, prior, data, e, mode, reports, without)
     if data.s_m.size == 0:
         mean = np.full(e.size, prior.mean)
         std = np.full(e.size, prior.std)
@@ -71,6 +81,7 @@ def fuse(
     *,
     groups: np.ndarray | None = None,
     mode: FusionMode = "paper",
+    reports: ReportData | None = None,
 ) -> FusedEstimate:
     """Fuse friction estimates with heteroscedastic GP regression (paper Sec. III, App. A).
 
@@ -94,6 +105,11 @@ def fuse(
         and share its error (safe mode only; ignored by paper mode except for validation).
     mode
         ``"paper"`` (the paper's method) or ``"safe"`` (shared errors and hard bounds).
+    reports
+        Optional shared reports in the same frame as ``s_m``
+        (:func:`~mufusion.fusion.reports.report_data`): a third source, used one-sidedly
+        (:mod:`~mufusion.fusion.shared_fusion`, decision 0060). None or empty: the result is
+        the two-source fusion's, bit for bit.
 
     Returns
     -------
@@ -109,7 +125,8 @@ def fuse(
     ValueError
         If an array is not 1-D or a value is not finite or outside its declared range, lengths
         differ, ``s_eval_m`` is empty, ``prior`` is not a :class:`GPPrior`, ``groups`` has the
-        wrong length or non-integer labels, or ``mode`` is unknown.
+        wrong length or non-integer labels, ``mode`` is unknown, or ``reports`` is not a
+        :class:`~mufusion.fusion.reports.ReportData`.
 
     Examples
     --------
@@ -122,7 +139,15 @@ def fuse(
     # The data never leave this call: validated, but not wrapped in read-only views.
     data = FusionData._trusted(*validate_data(s_m, mu, margin, groups), read_only=False)
     e = check_positions("s_eval_m", s_eval_m)
-    return fuse_validated(DEFAULT_ENGINE, prior, data, e, mode)
+    return fuse_validated(DEFAULT_ENGINE, prior, data, e, mode, check_reports(reports))
+
+
+def check_reports(reports: object) -> ReportData | None:
+    """``reports`` if it is None or a :class:`~mufusion.fusion.reports.ReportData`, else
+    ValueError."""
+    if reports is None or isinstance(reports, ReportData):
+        return reports
+    raise ValueError(f"reports must be a ReportData or None, got {type(reports).__name__}")
 
 
 class GPFusion:
@@ -178,14 +203,18 @@ class GPFusion:
         """:func:`fuse` with this object's prior, grid and mode (same parameters and errors)."""
         return self.step(FusionData(s_m, mu, margin, groups))
 
-    def step(self, data: FusionData) -> FusedEstimate:
-        """Fuse one :class:`~mufusion.fusion.FusionData` (one planning step; validated when built).
+    def step(self, data: FusionData, reports: ReportData | None = None) -> FusedEstimate:
+        """Fuse one :class:`~mufusion.fusion.FusionData` (one planning step; validated when built),
+        with optional shared reports in the same frame (:func:`fuse`'s ``reports``).
 
         Raises
         ------
         ValueError
-            If ``data`` is not a :class:`~mufusion.fusion.FusionData`.
+            If ``data`` is not a :class:`~mufusion.fusion.FusionData` or ``reports`` not a
+            :class:`~mufusion.fusion.reports.ReportData` or None.
         """
         if not isinstance(data, FusionData):
             raise ValueError(f"data must be a FusionData, got {type(data).__name__}")
-        return fuse_validated(self.engine, self.prior, data, self.s_eval_m, self.mode)
+        return fuse_validated(
+            self.engine, self.prior, data, self.s_eval_m, self.mode, check_reports(reports)
+        )

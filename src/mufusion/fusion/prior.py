@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mufusion.estimators.shared import check_in
+
 Z95 = 1.96
 """Two-sided 95 % quantile of the standard normal: margin = Z95 · std (paper Sec. III)."""
 
@@ -31,14 +33,7 @@ which μ is a constant for any planning horizon."""
 
 def _check_in(name: str, value: object, bounds: tuple[float, float], unit: str = "") -> float:
     """``float(value)`` if it is a finite number within ``bounds`` (inclusive), else ValueError."""
-    lo, hi = bounds
-    try:
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a finite number, got {value!r}") from None
-    if not lo <= x <= hi:  # also rejects NaN
-        raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}]{unit}, got {value!r}")
-    return x
+    return check_in(name, value, bounds[0], bounds[1], unit)
 
 
 @dataclass(frozen=True)

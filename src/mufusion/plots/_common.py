@@ -29,6 +29,8 @@ CONFIG_COLORS: dict[str, str] = {
     Configuration.P: "tab:green",
     Configuration.F: "tab:blue",
     Configuration.F_SAFE: "tab:purple",
+    Configuration.F_SHARED: "tab:cyan",
+    Configuration.F_SAFE_SHARED: "tab:pink",
 }
 # Colour scale of the road surface: low μ (ice, snow) pale, dry asphalt (μ ≈ 1) grey; kept apart
 # from the configuration colours so vehicles and plans stay visible on any surface.

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mufusion.configurations import Configuration
+from mufusion.configurations import STANDARD_CONFIGURATIONS, Configuration
 from mufusion.vehicle.params import TRUCK
 
 C = Configuration
@@ -46,7 +46,7 @@ class Setting:
     overrides: tuple[str, ...]
     paper: str
     authors: str
-    reaches: tuple[Configuration, ...] = tuple(Configuration)
+    reaches: tuple[Configuration, ...] = STANDARD_CONFIGURATIONS
 
 
 _LOCAL = (C.L, C.F, C.F_SAFE)

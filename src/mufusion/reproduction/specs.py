@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from mufusion.campaign import RunSpec, with_indices
-from mufusion.configurations import Configuration
+from mufusion.configurations import STANDARD_CONFIGURATIONS
 from mufusion.reproduction.variants import VARIANTS
 
 
@@ -19,5 +19,5 @@ def reproduction_specs(include_car: bool = True) -> list[RunSpec]:
         RunSpec(scenario=v.scenario, config=c.value, variant=v.key, overrides=v.overrides)
         for v in VARIANTS
         if include_car or v.paper_vehicle
-        for c in Configuration
+        for c in STANDARD_CONFIGURATIONS
     ])

@@ -22,6 +22,7 @@ from mufusion.scenarios.sections import (
     VehicleName,
     _Strict,
 )
+from mufusion.scenarios.shared_section import SharedSection
 from mufusion.sim.faults import Fault
 from mufusion.sim.settings import LaneRecoverySettings, LoopRates, ProbingSettings
 
@@ -56,6 +57,8 @@ class Scenario(_Strict):
     """How the loop reacts to missing, stale or failing parts (:mod:`mufusion.sim.faults`)."""
     probing: ProbingSettings = ProbingSettings()
     """Active friction probing (beyond the paper, :mod:`mufusion.sim.supervision`)."""
+    shared: SharedSection = SharedSection()
+    """Shared friction reports, read by F+shared and F-safe+shared (decision 0060)."""
     lane_recovery: LaneRecoverySettings = LaneRecoverySettings()
     """Relaxing μ̂ towards the posterior mean when no friction-limited plan keeps the lane."""
 

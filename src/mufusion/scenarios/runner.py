@@ -48,6 +48,7 @@ from mufusion.scenarios.config import (
 )
 from mufusion.scenarios.feasibility import classify_scenario
 from mufusion.scenarios.road_kind import RoadScenario
+from mufusion.scenarios.shared_section import scenario_inbox
 from mufusion.sim.components import Controller, Planner
 from mufusion.sim.log import RunLog
 from mufusion.sim.loop import ClosedLoop
@@ -118,7 +119,8 @@ def build_loop(
     cfg
         Validated scenario.
     friction
-        A built-in configuration (``GT``, ``L``, ``P``, ``F``, ``F-safe``), a plug-in's name
+        A built-in configuration (``GT``, ``L``, ``P``, ``F``, ``F-safe``, ``F+shared``,
+        ``F-safe+shared``: the last two read the ``[shared]`` reports file), a plug-in's name
         (``"module:attribute"`` or an entry point of ``mufusion.friction_sources``, see
         :mod:`mufusion.configurations.plugins`; made afresh for this run), or a friction source
         object (:class:`~mufusion.configurations.FrictionSource`; its label is its ``name``
@@ -150,7 +152,7 @@ def build_loop(
     world = World(road=road, to_planner_obstacle=_planner_obstacle)
     rates = cfg.rates()
     classes = class_table(cfg.estimation.class_table)
-    source, label = _friction_source(friction, classes, cfg.estimation.length_scale_m)
+    source, label = _friction_source(friction, classes, cfg)
     own_config = planner_config(cfg, params)
     the_planner: Planner = (
         planner_for(cfg) if planner is None
@@ -222,12 +224,17 @@ def _component_name(component: object) -> str | None:
 def _friction_source(
     friction: Configuration | str | FrictionSource,
     classes: tuple[SurfaceClass, ...],
-    length_scale_m: float | None,
+    cfg: Scenario,
 ) -> tuple[FrictionSource, str]:
-    """The friction source ``friction`` names, made for one run, and its label."""
+    """The friction source ``friction`` names, made for one run, and its label (a shared
+    configuration gets the scenario's ``[shared]`` reports file, if any)."""
     if is_builtin(friction):
         name = Configuration.parse(friction)  # type: ignore[arg-type]
-        return make_estimator(name, classes=classes, length_scale_m=length_scale_m), name.value
+        inbox = scenario_inbox(cfg.shared, cfg.seed) if name.shares_reports else None
+        source = make_estimator(name, classes=classes,
+                                length_scale_m=cfg.estimation.length_scale_m,
+                                shared=cfg.shared.settings(), inbox=inbox)
+        return source, name.value
     if isinstance(friction, str):
         import_from_cwd()
         return make_friction_plugin(friction), friction

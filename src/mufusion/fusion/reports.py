@@ -1,0 +1,178 @@
+"""Shared friction reports as fusion input: ageing, position error, trust test, sender cap.
+
+Reports (:class:`~mufusion.estimators.shared.FrictionReport`) from earlier vehicles or roadside
+units are a third source beside the camera's classes and the local estimate
+(docs/decisions/0060-shared-friction.md, docs/shared-friction.md). This module turns the
+received reports into a validated :class:`ReportData` in the receiver's frame; the fusion with
+them is :mod:`mufusion.fusion.shared_fusion`.
+
+**Age.** Following the spatio-temporal GP view (Särkkä, Solin & Hartikainen 2013: a Matérn-1/2
+kernel in time is an Ornstein–Uhlenbeck process whose variance relaxes to the prior's between
+observations), a report's variance grows with its age Δt towards the prior's::
+
+    σ²(Δt) = σ²_report + σ²_prior · (1 − exp(−Δt / τ)).
+
+**Position error.** A report stands for μ at a position known to ± σ_s (1.96 σ_s at 95 %). Within
+one surface segment μ changes by at most a declared G per metre (``gradient_bound_per_m``), so a
+position error δs moves the μ it stands for by at most G·|δs|: the GP gets it as input noise,
+``(G σ_s)²`` added to the variance, and the hard bound of safe mode subtracts ``G·(|s − s_r| +
+1.96 σ_s)`` at an evaluation point s.
+
+**Sender cap.** One sender's reports share its bias (a miscalibrated estimator, a constant
+offset): within a length scale ℓ of a report, a sender counts at most ``sender_cap`` reports;
+with n of its reports there, each one's variance is multiplied by ``max(1, n / sender_cap)``.
+Sybil identities (one sender, many pseudonyms) defeat this cap; the one-sided rule and the
+minimum in safe mode's hard bound do not depend on counts (decision 0060).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mufusion.estimators.shared import (
+    DEFAULT_SHARED,
+    FrictionReport,
+    SharedSettings,
+    check_in,
+)
+from mufusion.fusion.data import MARGIN_RANGE, NOISE_STD_FLOOR, POSITION_RANGE_M
+from mufusion.fusion.prior import Z95, GPPrior
+
+
+def age_variance(age_s: np.ndarray, prior_std: float, tau_s: float) -> np.ndarray:
+    """Variance a report gains by its age [-²]: ``σ²_prior · (1 − exp(−Δt / τ))``.
+
+    Negative ages (a report stamped in the receiver's future: clock skew) count as 0.
+
+    Examples
+    --------
+    >>> round(float(age_variance(np.array([1e9]), 0.2, 600.0)[0]), 6)
+    0.04
+    """
+    age = np.maximum(np.asarray(age_s, dtype=float), 0.0)
+    return prior_std * prior_std * -np.expm1(-age / tau_s)
+
+
+@dataclass(frozen=True)
+class ReportData:
+    """Received reports in the receiver's frame, validated, aged and ready for the fusion.
+
+    Attributes
+    ----------
+    s_m
+        Report positions ahead of the vehicle [m], shape ``(n,)``.
+    mu
+        Most probable μ [-], shape ``(n,)``.
+    noise_sd
+        GP noise std [-]: own noise, age, position error (``G σ_s``) and the sender cap.
+    lower
+        Aged lower bound on μ at the report's position [-] (no position term).
+    position_bound_m
+        95 % position error 1.96 σ_s [m].
+    sender
+        Integer sender label per report (0, 1, … in order of first appearance).
+    age_s
+        Age at the receiver's time [s].
+    settings
+        The :class:`SharedSettings` they were prepared with.
+    """
+
+    s_m: np.ndarray
+    mu: np.ndarray
+    noise_sd: np.ndarray
+    lower: np.ndarray
+    position_bound_m: np.ndarray
+    sender: np.ndarray
+    age_s: np.ndarray
+    settings: SharedSettings
+
+    @property
+    def size(self) -> int:
+        """Number of reports."""
+        return int(self.s_m.size)
+
+    @property
+    def margin(self) -> np.ndarray:
+        """The 95 % half-width the GP uses, ``1.96 · noise_sd`` [-]."""
+        return Z95 * self.noise_sd
+
+    def subset(self, keep: np.ndarray) -> ReportData:
+        """The reports where ``keep`` is True (same settings)."""
+        return ReportData(
+            self.s_m[keep], self.mu[keep], self.noise_sd[keep], self.lower[keep],
+            self.position_bound_m[keep], self.sender[keep], self.age_s[keep], self.settings,
+        )
+
+
+def _sender_inflation(s: np.ndarray, sender: np.ndarray, length_m: float, cap: float) -> np.ndarray:
+    """Variance factor per report: ``max(1, n / cap)``, n = its sender's reports within ℓ."""
+    near = np.abs(s[:, None] - s[None, :]) <= length_m
+    same = sender[:, None] == sender[None, :]
+    count = np.count_nonzero(near & same, axis=1)
+    return np.maximum(1.0, count / cap)
+
+
+def report_data(
+    reports: Sequence[FrictionReport],
+    *,
+    t_now_s: float,
+    s_ego_m: float,
+    prior: GPPrior,
+    settings: SharedSettings = DEFAULT_SHARED,
+    window_m: tuple[float, float] = (-10.0, 60.0),
+) -> ReportData:
+    """The reports that matter now, in the receiver's frame (positions relative to ``s_ego_m``).
+
+    Dropped: reports older than ``settings.validity_s`` and those outside ``window_m`` (relative
+    positions [m], e.g. the fusion grid with some slack). The GP std of each kept report is
+    ``sqrt((margin/1.96)² + σ²_prior (1 − e^(−Δt/τ)) + (G σ_s)²)`` times ``sqrt`` of its sender
+    factor, floored at ``NOISE_STD_FLOOR`` and capped at ``MARGIN_RANGE[1] / 1.96``.
+
+    Raises
+    ------
+    ValueError
+        If ``t_now_s`` or ``s_ego_m`` is not finite, ``s_ego_m`` is outside ``POSITION_RANGE_M``,
+        an element of ``reports`` is not a :class:`FrictionReport`, or ``window_m`` is not an
+        increasing pair.
+
+    Examples
+    --------
+    >>> from mufusion.fusion import PAPER_PRIOR
+    >>> r = FrictionReport.numeric(112.0, 0.5, 0.025, t_created_s=0.0)
+    >>> d = report_data([r], t_now_s=60.0, s_ego_m=100.0, prior=PAPER_PRIOR)
+    >>> d.s_m.tolist(), bool(d.margin[0] > 0.025)
+    ([12.0], True)
+    """
+    check_in("t_now_s", t_now_s, -1e12, 1e12, " s")
+    check_in("s_ego_m", s_ego_m, *POSITION_RANGE_M, " m")
+    lo_w, hi_w = (float(w) for w in window_m)
+    if not lo_w < hi_w:
+        raise ValueError(f"window_m must be an increasing pair, got {window_m!r}")
+    for r in reports:
+        if not isinstance(r, FrictionReport):
+            raise ValueError(f"reports must hold FrictionReport records, got {type(r).__name__}")
+    rel = np.array([r.s_m for r in reports], dtype=float) - float(s_ego_m)
+    age = float(t_now_s) - np.array([r.t_created_s for r in reports], dtype=float)
+    keep = (age <= settings.validity_s) & (rel >= lo_w) & (rel <= hi_w)
+    kept = [r for r, k in zip(reports, keep, strict=True) if k]
+    rel, age = rel[keep], age[keep]
+    mu = np.array([r.mu for r in kept], dtype=float)
+    own_lower = np.array([r.lower_mu for r in kept], dtype=float)
+    margin = np.array([r.margin for r in kept], dtype=float)
+    pos_sd = np.array([r.position_std_m for r in kept], dtype=float)
+    ids: dict[str, int] = {}
+    sender = np.array([ids.setdefault(r.sender, len(ids)) for r in kept], dtype=np.int64)
+    aged = age_variance(age, prior.std, settings.tau_s)
+    own_sd = margin / Z95
+    g_pos = settings.gradient_bound_per_m * pos_sd
+    var = (own_sd * own_sd + aged + g_pos * g_pos) * _sender_inflation(
+        rel, sender, prior.length_scale_m, settings.sender_cap
+    )
+    noise_sd = np.clip(np.sqrt(var), NOISE_STD_FLOOR, MARGIN_RANGE[1] / Z95)
+    # The lower side ages like the whole report: mu − 1.96 sqrt(((mu − lower)/1.96)² + σ²_age).
+    low_sd = (mu - own_lower) / Z95
+    lower = mu - Z95 * np.sqrt(low_sd * low_sd + aged)
+    return ReportData(rel, mu, noise_sd, lower, Z95 * pos_sd, sender, age, settings)

@@ -1,0 +1,216 @@
+"""Fusion with shared reports as a third source, in both modes (decision 0060).
+
+Given the vehicle's own data (camera classes, local estimate: a :class:`FusionData`) and the
+received reports (:class:`~mufusion.fusion.reports.ReportData`):
+
+1. **Trust test** (:func:`screen_reports`). The vehicle's own prediction at a report is its
+   nearest own datum (y_o ± m_o). A report is *optimistic beyond the combined bounds* when its
+   aged lower bound, moved to that datum, exceeds the own upper bound:
+   ``lower_r − G·(δ_r + |s_r − s_o|) > y_o + m_o``; it is rejected. A report *below* the own
+   estimate is kept whatever its size: it can only lower μ̂ (black ice the camera cannot see).
+2. **Confirmation.** A kept report *confirms at* an evaluation point s when an own datum lies
+   within ``reach_m + δ_r`` of the report, ``|s − s_r| ≤ reach_m + δ_r``, and the own data from
+   the last one at or before ``min(s, s_r − δ_r)`` to the first one at or after ``max(s, s_r +
+   δ_r)`` all carry one segment label (the camera saw no change of class over the stretch; the
+   local estimate counts with the class segment it stands on).
+3. **One-sided rule.** Let L⁺ be the lower bound of the GP with own data and kept reports, L⁻ the
+   one with own data only. μ̂ uses ``L⁺`` where some report confirms, and ``min(L⁺, L⁻)``
+   elsewhere: a report that no own estimate confirms (none near it, or on the other side of a
+   class change) never raises μ̂, and an old high-μ report, whose aged lower bound drops towards
+   the prior's, raises it only as far as its own aged bound allows (step 4) in safe mode.
+4. **Safe mode's hard bound with reports.** ``H(s) = max(H_own(s), H_rep(s))`` where some
+   report confirms at s, else ``H_own(s)``, with
+   ``H_rep(s) = min_r lower_r(Δt) − min_c G·(|s − s_c| + δ_c)``, r over the kept reports within
+   ``reach_m + δ_r`` of s or in its class segment, c over those that confirm at s. Under the
+   premise it is at most ``lower_c − G·(|s − s_c| + δ_c) ≤ μ(s)`` for the confirming report c
+   of the smallest term. The minimum of the bounds, not the maximum, although each is valid
+   under the premise: one optimistic report (or any number of Sybil identities) cannot lift H
+   above what the honest reports in the segment allow. μ̂ = min(one-sided paper lower bound, H)
+   on the data, and also at most the one-sided grouped lower bound beyond them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mufusion.fusion.assembly import LOCAL_GROUP
+from mufusion.fusion.data import FusedEstimate, FusionData, clip_to_band
+from mufusion.fusion.engine import PosteriorEngine, noise_sd_of
+from mufusion.fusion.prior import Z95, GPPrior
+from mufusion.fusion.reports import ReportData
+from mufusion.fusion.safe import grouped_noise, hard_bound_envelope
+
+
+@dataclass(frozen=True)
+class ReportScreen:
+    """The outcome of the trust test for each report.
+
+    Attributes
+    ----------
+    kept
+        Passed the trust test (or it is off), shape ``(n,)``.
+    rejected
+        Optimistic beyond the combined bounds of the own estimate (``~kept`` when the test is on).
+    near_own
+        An own datum lies within ``reach_m + δ_r`` of the report.
+    """
+
+    kept: np.ndarray
+    rejected: np.ndarray
+    near_own: np.ndarray
+
+
+def _nearest(sorted_s: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Index into ``sorted_s`` of the nearest element to each ``x``."""
+    idx = np.clip(np.searchsorted(sorted_s, x), 1, max(sorted_s.size - 1, 1))
+    left = np.maximum(idx - 1, 0)
+    right = np.minimum(idx, sorted_s.size - 1)
+    return np.where(np.abs(x - sorted_s[left]) <= np.abs(sorted_s[right] - x), left, right)
+
+
+def _own_sorted(own: FusionData) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Own data sorted by s: positions, μ, margin and segment labels (the local estimate counted
+    with the class segment it stands on; every datum its own segment without labels)."""
+    order = np.argsort(own.s_m, kind="stable")
+    if own.groups is None:
+        seg = np.arange(own.s_m.size, dtype=np.int64)
+    else:
+        seg = np.where(own.groups == LOCAL_GROUP, LOCAL_GROUP + 1, own.groups)[order]
+    return own.s_m[order], own.mu[order], own.margin[order], seg
+
+
+def screen_reports(own: FusionData, reports: ReportData) -> ReportScreen:
+    """The trust test against the vehicle's own estimate (module docstring, step 1).
+
+    Examples
+    --------
+    >>> from mufusion.fusion import PAPER_PRIOR
+    >>> from mufusion.estimators.shared import FrictionReport
+    >>> from mufusion.fusion.reports import report_data
+    >>> own = FusionData([0.0, 10.0], [0.5, 0.5], [0.1, 0.1])
+    >>> rs = [FrictionReport.numeric(10.0, 0.55, 0.025), FrictionReport.numeric(10.0, 0.9, 0.025)]
+    >>> d = report_data(rs, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR)
+    >>> screen_reports(own, d).kept.tolist()
+    [True, False]
+    """
+    n = reports.size
+    if own.s_m.size == 0 or n == 0:
+        none = np.zeros(n, dtype=bool)
+        return ReportScreen(~none, none, none)
+    s_o, mu_o, m_o, _ = _own_sorted(own)
+    near_i = _nearest(s_o, reports.s_m)
+    dist = np.abs(reports.s_m - s_o[near_i])
+    g = reports.settings.gradient_bound_per_m
+    near = dist <= reports.settings.reach_m + reports.position_bound_m
+    at_own = reports.lower - g * (reports.position_bound_m + dist)
+    rejected = near & (at_own > mu_o[near_i] + m_o[near_i])
+    if not reports.settings.trust_test:
+        rejected = np.zeros(n, dtype=bool)
+    return ReportScreen(~rejected, rejected, near)
+
+
+def _report_bound(
+    own: FusionData, r: ReportData, confirmers: np.ndarray, e: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``H_rep`` at ``e`` and where some report confirms (module docstring, steps 2 and 4)."""
+    g = r.settings.gradient_bound_per_m
+    dist = np.abs(e[:, None] - r.s_m[None, :])  # (m, n)
+    within = dist <= r.settings.reach_m + r.position_bound_m[None, :]
+    s_o, _, _, seg = _own_sorted(own)
+    # One class segment from the last own datum at or before min(s, s_r − δ_r) to the first at or
+    # after max(s, s_r + δ_r): the camera saw no change of class in between (a change may lie
+    # anywhere between two data, so the bracketing data must agree, not the nearest ones).
+    changes = np.concatenate([[0], np.cumsum(seg[1:] != seg[:-1])])
+    lo = np.minimum(e[:, None], (r.s_m - r.position_bound_m)[None, :])
+    hi = np.maximum(e[:, None], (r.s_m + r.position_bound_m)[None, :])
+    inside = (lo >= s_o[0] - 1e-9) & (hi <= s_o[-1] + 1e-9)
+    i0 = np.clip(np.searchsorted(s_o, lo + 1e-9, side="right") - 1, 0, s_o.size - 1)
+    i1 = np.clip(np.searchsorted(s_o, hi - 1e-9, side="left"), 0, s_o.size - 1)
+    one_segment = inside & (changes[i1] == changes[i0])
+    confirms = within & confirmers[None, :] & one_segment
+    confirmed = confirms.any(axis=1)
+    # The lowest bound of every kept report near s or in its class segment, less the smallest
+    # position term of a *confirming* report c: ≤ lower_c − G·(|s − s_c| + δ_c) ≤ μ(s) under the
+    # premise (decision 0060), and no report, nor any number of identities, lifts it above the
+    # lowest report of the segment.
+    lowest = np.where(within | one_segment, r.lower[None, :], np.inf).min(axis=1)
+    shift = np.where(confirms, g * (dist + r.position_bound_m[None, :]), np.inf).min(axis=1)
+    h_rep = np.where(confirmed, lowest - np.where(confirmed, shift, 0.0), -np.inf)
+    return h_rep, confirmed
+
+
+def _latent_lower(
+    engine: PosteriorEngine,
+    prior: GPPrior,
+    s: np.ndarray,
+    e: np.ndarray,
+    resid: np.ndarray,
+    noise_sd: np.ndarray,
+    groups: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Posterior mean, std and lower bound (grouped noise if ``groups`` is given)."""
+    split = None if groups is None else grouped_noise(noise_sd, groups)
+    if split is None:
+        offset, std = engine.latent(prior, s, e, resid, noise_sd)
+    else:
+        offset, std = engine.latent(prior, s, e, resid, split[0], split[1])
+    mean = offset + prior.mean
+    return mean, std, mean - Z95 * std
+
+
+def fuse_shared(
+    engine: PosteriorEngine,
+    prior: GPPrior,
+    own: FusionData,
+    e: np.ndarray,
+    mode: str,
+    reports: ReportData,
+    without: FusedEstimate,
+) -> FusedEstimate:
+    """The fused estimate with reports, from validated inputs (module docstring).
+
+    ``without`` is the estimate on the own data alone (same mode); it is returned unchanged when
+    the trust test keeps no report. ``mean``/``std``/``lower`` of the result are the posterior
+    with own data and kept reports (grouped noise in safe mode, one group per sender).
+    """
+    screen = screen_reports(own, reports)
+    r = reports.subset(screen.kept)
+    if r.size == 0:
+        return without
+    confirmers = screen.near_own[screen.kept]
+    s_all = np.concatenate([own.s_m, r.s_m])
+    resid = np.concatenate([own.mu, r.mu]) - prior.mean
+    sd_all = np.concatenate([noise_sd_of(own.margin), r.noise_sd])
+    mean, std, lower = _latent_lower(engine, prior, s_all, e, resid, sd_all)
+    top = max(prior.upper, own.mu_max, float(r.mu.max()))
+    if own.s_m.size == 0:
+        # Nothing of the vehicle's own can confirm a report: they may only lower μ̂.
+        mu_hat = np.minimum(lower, without.mu_hat)
+        if mode == "paper":
+            return FusedEstimate(e, mean, std, lower, clip_to_band(mu_hat, top))
+        _, g_std, g_lower = _latent_lower(
+            engine, prior, s_all, e, resid, sd_all, r.sender)
+        return FusedEstimate(e, mean, g_std, g_lower, clip_to_band(mu_hat, top))
+    h_rep, confirmed = _report_bound(own, r, confirmers, e)
+    if mode == "paper":
+        one_sided = np.where(confirmed, lower, np.minimum(lower, without.lower))
+        return FusedEstimate(e, mean, std, lower, clip_to_band(one_sided, top))
+    # Safe mode: the own-data pieces without reports, then the one-sided rule and the bound H.
+    own_sd = noise_sd_of(own.margin)
+    own_resid = own.mu - prior.mean
+    _, _, paper_without = _latent_lower(engine, prior, own.s_m, e, own_resid, own_sd)
+    own_groups = (
+        np.arange(own.s_m.size, dtype=np.int64) if own.groups is None else own.groups
+    )
+    groups = np.concatenate([own_groups, int(own_groups.max()) + 1 + r.sender])
+    g_mean, g_std, g_lower = _latent_lower(engine, prior, s_all, e, resid, sd_all, groups)
+    paper_used = np.where(confirmed, lower, np.minimum(lower, paper_without))
+    grouped_used = np.where(confirmed, g_lower, np.minimum(g_lower, without.lower))
+    h_own, outside = hard_bound_envelope(own.s_m, own.mu, own.margin, e)
+    bound = np.where(confirmed, np.maximum(h_own, h_rep), h_own)
+    mu_hat = np.minimum(paper_used, bound)
+    mu_hat = np.where(outside, np.minimum(mu_hat, grouped_used), mu_hat)
+    return FusedEstimate(e, g_mean, g_std, g_lower, clip_to_band(mu_hat, top))
+
