@@ -21,10 +21,8 @@ TRUE_MU = np.full(51, 0.5)
 
 def _estimate(name, inbox=None, s_ego_m=100.0, t_s=5.0):
     source = make_estimator(name, inbox=inbox) if inbox is not None else make_estimator(name)
-    if hasattr(source, "locate"):
-        source.locate(t_s, s_ego_m)
     sensors = make_sensor_model(local_error="worst_under")
-    return step_source(source, sensors, GRID, TRUE_MU, 0.0, t_s=t_s)
+    return step_source(source, sensors, GRID, TRUE_MU, 0.0, t_s=t_s, s_ego_m=s_ego_m)
 
 
 @pytest.mark.parametrize(("shared", "base"), [("F+shared", "F"), ("F-safe+shared", "F-safe")])
@@ -47,6 +45,11 @@ def test_reports_are_placed_by_the_vehicle_position():
     assert np.array_equal(elsewhere, base)
     assert (here > base + 0.02).sum() > 20
     assert (here <= 0.5 + 1e-12).all()
+    # Without a position (a frame whose localisation is missing) no report is placed.
+    sensors = make_sensor_model(local_error="worst_under")
+    unplaced = step_source(make_estimator("F-safe+shared", inbox=inbox), sensors, GRID, TRUE_MU,
+                           0.0, t_s=5.0).mu_hat
+    assert np.array_equal(unplaced, base)
 
 
 def test_inbox_rejected_by_a_configuration_without_reports():

@@ -135,6 +135,7 @@ def step_source(
     t_s: float | None = None,
     signals: VehicleSignals | None = None,
     channels: Collection[Channel] | None = None,
+    s_ego_m: float | None = None,
 ) -> FrictionEstimate:
     """One planning step of ``source`` on what ``sensors`` report from the true friction.
 
@@ -148,7 +149,7 @@ def step_source(
         The friction source (see :class:`FrictionSource`).
     sensors
         The sensor model that makes the frame.
-    s_ahead_m, mu_true_ahead, utilization, camera_ok, t_s, signals
+    s_ahead_m, mu_true_ahead, utilization, camera_ok, t_s, signals, s_ego_m
         See :meth:`~mufusion.estimators.sensor_model.SensorModel.frame`.
     channels
         The source's channels, if already known (default: :func:`channels_of`).
@@ -166,7 +167,7 @@ def step_source(
     channels = channels_of(source) if channels is None else channels
     frame, truth = sensors.frame(
         s_ahead_m, mu_true_ahead, utilization, channels=channels, camera_ok=camera_ok, t_s=t_s,
-        signals=signals,
+        signals=signals, s_ego_m=s_ego_m,
     )
     out = source.step(frame, truth) if Channel.TRUTH in channels else source.step(frame)
     estimate = out if isinstance(out, FrictionEstimate) else None

@@ -25,8 +25,8 @@ friction, except GT, which declares the truth channel and reads nothing else::
     As F with the fusion's ``mode="safe"`` (see :mod:`mufusion.fusion`).
 ``F+shared``, ``F-safe+shared``
     As F and F-safe, with the reports of other vehicles received so far as a third source
-    (decision 0060); the loop tells the source where it is (``locate``). Without reports they
-    are F and F-safe, bit for bit.
+    (decision 0060), placed against the frame's time and map position
+    (``SensorFrame.s_ego_m``). Without reports they are F and F-safe, bit for bit.
 
 The slip estimator reports at every step whichever configuration reads it, so the local value
 and its availability are logged for all of them. Each ``μ̂`` is finally clipped into
@@ -171,18 +171,15 @@ class Fused(FrictionConfiguration):
         self.s_local_m = s_local_m
         self.shared = shared
         self.inbox = inbox
-        self._where: tuple[float, float] | None = None  # (t_s, s_ego_m) of the planning step
         # The fusion's cached kernel blocks are per evaluation grid; rebuilt if the grid changes.
         self._fusion: GPFusion | None = None
 
-    def locate(self, t_s: float, s_ego_m: float) -> None:
-        """Where the vehicle is on the map at the coming planning step (for the reports)."""
-        self._where = (float(t_s), float(s_ego_m))
-
-    def _reports(self, s: np.ndarray) -> ReportData | None:
-        if self.inbox is None or self._where is None:
+    def _reports(self, frame: SensorFrame) -> ReportData | None:
+        """The reports placed against the frame's time and map position (none without a
+        position: a report cannot be placed ahead of a vehicle that does not know where it is)."""
+        t_s, s_ego_m, s = frame.t_s, frame.s_ego_m, frame.s_ahead_m
+        if self.inbox is None or not (math.isfinite(t_s) and math.isfinite(s_ego_m)):
             return None
-        t_s, s_ego_m = self._where
         window = (float(s[0]) - REPORT_WINDOW_SLACK_M, float(s[-1]) + REPORT_WINDOW_SLACK_M)
         return report_data(self.inbox.at(t_s), t_now_s=t_s, s_ego_m=s_ego_m, prior=self.prior,
                            settings=self.shared, window_m=window)
@@ -208,7 +205,7 @@ class Fused(FrictionConfiguration):
             mode=self.mode,
             **extra,
         )
-        fused = self._fusion_on(s).step(data, self._reports(s))
+        fused = self._fusion_on(s).step(data, self._reports(frame))
         return FrictionEstimate(
             s_m=s, mu_hat=np.asarray(fused.mu_hat, dtype=float), local_available=slip.available,
             local_mu=slip.mu, fused=fused, data=data,

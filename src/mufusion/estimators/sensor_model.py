@@ -108,6 +108,7 @@ class SensorModel:
         camera_ok: bool = True,
         t_s: float | None = None,
         signals: VehicleSignals | None = None,
+        s_ego_m: float | None = None,
     ) -> tuple[SensorFrame, TrueFriction]:
         """The sensors' reports for one planning step, and the truth they were made from.
 
@@ -130,6 +131,8 @@ class SensorModel:
             report is the one published by ``t_s`` from what :meth:`observe` recorded.
         signals : VehicleSignals, optional
             The vehicle's signals after the latest plant step (None before the first).
+        s_ego_m : float, optional
+            The vehicle's progress along the road's map [m] (its localisation).
 
         Returns
         -------
@@ -157,6 +160,7 @@ class SensorModel:
         frame = SensorFrame(
             t_s=math.nan if t_s is None else float(t_s), s_ahead_m=s,
             utilization_peak=float(utilization), slip=slip, camera=camera, signals=signals,
+            s_ego_m=math.nan if s_ego_m is None else float(s_ego_m),
         )
         return frame, TrueFriction(s_ahead_m=s, mu=_read_only(mu))
 

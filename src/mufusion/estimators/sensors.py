@@ -17,6 +17,7 @@ sensor does.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from enum import Enum
 
@@ -145,6 +146,10 @@ class SensorFrame:
         :attr:`Channel.CAMERA_MU`.
     signals
         The vehicle's signals after the latest plant step (None before the first step).
+    s_ego_m
+        The vehicle's progress along the road's map [m], from its localisation (what
+        map-referenced data such as shared friction reports are placed against; NaN where the
+        caller gives none).
     """
 
     t_s: float
@@ -153,6 +158,7 @@ class SensorFrame:
     slip: LocalEstimate
     camera: CameraReport | None = None
     signals: VehicleSignals | None = None
+    s_ego_m: float = math.nan
 
 
 @dataclass(frozen=True)

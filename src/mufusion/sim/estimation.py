@@ -50,19 +50,16 @@ class FrictionEstimation:
         self._channels = channels_of(friction)
         self._observe: Callable[[VehicleSignals], None] | None = getattr(
             friction, "observe", None)
-        # A source reading map-referenced data (shared reports) is told where the vehicle is.
-        self._locate: Callable[[float, float], None] | None = getattr(friction, "locate", None)
         self._last_output: tuple[float, PlantOutput] | None = None  # (its time, the output)
 
     def initial(self, x_plant: np.ndarray, s_ego_m: float) -> FrictionEstimate:
         """The estimate at the start, the tires having rolled freely (for the warm-up plans)."""
         # The local estimator has seen the tires rolling freely at the start.
         self.sensors.observe(0.0, 0.0, 0.0, *self.world.friction_under_axles(x_plant, self.params))
-        if self._locate is not None:
-            self._locate(0.0, s_ego_m)
         return step_source(
             self.friction, self.sensors, self.grid_m,
             self.world.friction(s_ego_m + self.grid_m), 0.0, t_s=0.0, channels=self._channels,
+            s_ego_m=s_ego_m,
         )
 
     def estimate(
@@ -74,13 +71,12 @@ class FrictionEstimation:
         util = 0.0 if "local_dropout" in kinds else utilization
         # An absent camera, or one whose values are NaN, gives nothing usable: discarded.
         camera_ok = not ({"camera_dropout", "camera_nan"} & kinds)
-        if self._locate is not None:
-            self._locate(t_s, s_ego_m)
         return step_source(
             self.friction, self.sensors, self.grid_m, mu_true, util,
             camera_ok=camera_ok, t_s=t_s, channels=self._channels,
             signals=None if self._last_output is None else vehicle_signals(
                 *self._last_output, self.params),
+            s_ego_m=s_ego_m,
         )
 
     def observe(self, t_s: float, output: PlantOutput, mu_front: float, mu_rear: float) -> None:
