@@ -210,7 +210,10 @@ def test_a_drop_further_ahead_is_never_harder(case, later) -> None:
     change = case["friction_change_ahead_m"]
     near = _run(case, mu_before=high, mu_turn=low)
     far = _run(case, mu_before=high, mu_turn=low, friction_change_ahead_m=change + later)
-    assert far.margin_mps >= near.margin_mps - 1e-9
+    # Moving the drop moves where the clothoids' 5 cm steps fall against it (PROFILE_STEP_M:
+    # the profile errs slow by O(step)); found once: 2.4e-5 m/s on a car's 15 m curve with the
+    # drop 0.875 m later. Monotone to 1 mm/s.
+    assert far.margin_mps >= near.margin_mps - 1e-3
     assert far.feasibility_class.rank >= near.feasibility_class.rank
 
 
