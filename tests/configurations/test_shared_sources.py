@@ -35,8 +35,9 @@ def test_without_reports_a_shared_configuration_is_its_base(shared, base):
 
 def test_reports_are_placed_by_the_vehicle_position():
     reports = tuple(
-        Delivery(FrictionReport.numeric(100.0 + s, 0.5, 0.025, t_created_s=0.0, sender="v1"), 1.0)
-        for s in np.arange(0.0, 51.0, 2.0)
+        Delivery(FrictionReport.numeric(100.0 + s, 0.5, 0.025, t_created_s=0.0,
+                                        sender=f"v{int(s) % 2}"), 1.0)
+        for s in np.arange(0.0, 51.0, 1.0)
     )
     inbox = ReportInbox(reports, CommModel())
     here = _estimate("F-safe+shared", inbox, s_ego_m=100.0).mu_hat

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mufusion.estimators.shared import FrictionReport
+from mufusion.estimators.shared import AGE_KERNELS, REPORT_BOUNDS, FrictionReport
 from mufusion.fusion import (
     DEFAULT_GRID_M,
     PAPER_PRIOR,
@@ -20,6 +20,8 @@ from mufusion.fusion import (
     report_data,
     screen_reports,
 )
+from mufusion.fusion.reports import age_variance
+from mufusion.fusion.shared_fusion import conflicts
 
 GRID = DEFAULT_GRID_M
 CLASSES = ((0.25, 0.15), (0.5, 0.1), (0.8, 0.2))  # snow/ice, wet, dry: (value, margin)
@@ -63,10 +65,13 @@ def test_fresh_accurate_reports_raise_the_bound_and_old_ones_do_not(mode):
     # True μ 0.5 on wet: the camera's class 0.5 ± 0.1, no local estimate.
     data = _own(np.full(51, 0.5), np.full(51, 0.1), None, mode)
     base = _fuse(data, mode).mu_hat
-    pairs = [(s, 0.5) for s in np.arange(0.0, 51.0, 2.0)]
-    fresh = _fuse(data, mode, _reports(pairs, t_now_s=10.0)).mu_hat
-    old = _fuse(data, mode, _reports(pairs, t_now_s=3.0 * 3600.0,
-                                     settings_=SharedSettings(validity_s=1e5))).mu_hat
+    # Two senders (safe mode's hard bound needs two to vouch for it, decision 0063).
+    rs = [FrictionReport.numeric(s, 0.5, 0.025, sender=f"v{i % 2}")
+          for i, s in enumerate(np.arange(0.0, 51.0, 1.0))]
+    fresh = _fuse(data, mode, report_data(rs, t_now_s=10.0, s_ego_m=0.0,
+                                          prior=PAPER_PRIOR)).mu_hat
+    old = _fuse(data, mode, report_data(rs, t_now_s=3.0 * 3600.0, s_ego_m=0.0, prior=PAPER_PRIOR,
+                                        settings=SharedSettings(validity_s=1e5))).mu_hat
     assert (fresh >= base - 1e-12).all() and (fresh > base + 0.01).any()
     assert (fresh <= 0.5 + 1e-12).all()
     assert (old <= base + 1e-3).all()  # aged towards the prior: (almost) nothing left to add
@@ -116,7 +121,8 @@ def test_reports_are_placed_relative_to_the_vehicle_and_expire():
 
 @pytest.mark.parametrize(
     ("field", "value"), [("tau_s", 0.0), ("reach_m", -1.0), ("sender_cap", 0.5),
-                         ("gradient_bound_per_m", 2.0)])
+                         ("gradient_bound_per_m", 2.0), ("report_bound", "max"),
+                         ("age_kernel", "rbf"), ("corroboration", 0)])
 def test_settings_name_the_bad_field(field, value):
     with pytest.raises(ValueError, match=field):
         SharedSettings(**{field: value})
@@ -144,13 +150,16 @@ def _truth(changes, values):
     local=st.booleans(),
     pos_sd=st.sampled_from([0.0, 0.3, 1.5]),
     age_s=st.sampled_from([0.0, 30.0, 900.0, 7200.0]),
+    bound=st.sampled_from(REPORT_BOUNDS),
+    kernel=st.sampled_from(AGE_KERNELS),
 )
 def test_safe_mode_never_exceeds_the_truth_with_reports_in_their_bounds(
-    seed, n_changes, n_reports, local, pos_sd, age_s
+    seed, n_changes, n_reports, local, pos_sd, age_s, bound, kernel
 ):
-    """Decision 0060's guarantee: every own datum and every report within its declared bounds
+    """Decisions 0060 and 0063: every own datum and every report within its declared bounds
     (errors within margins, position within 1.96 σ_s, surface constant within a camera class
-    segment, unchanged since the report) ⇒ μ̂ ≤ μ_gt at every own data position."""
+    segment, unchanged since the report) ⇒ μ̂ ≤ μ_gt at every own data position, with either
+    rule of combining the reports and either ageing kernel."""
     rng = np.random.default_rng(seed)
     changes = np.sort(rng.uniform(0.5, 49.5, n_changes))
     cls = [int(rng.integers(3))]
@@ -171,7 +180,110 @@ def test_safe_mode_never_exceeds_the_truth_with_reports_in_their_bounds(
         y = float(np.clip(mu(x_true) + rng.uniform(-1.0, 1.0) * margin, 0.0, 2.0))
         reports.append(FrictionReport.numeric(
             x_rep, y, margin, t_created_s=-age_s, position_std_m=pos_sd, sender=f"v{i % 4}"))
-    rd = report_data(reports, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR)
+    rd = report_data(reports, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR,
+                     settings=SharedSettings(report_bound=bound, age_kernel=kernel))
     est = _fuse(data, "safe", rd)
     assert (est.mu_hat <= mu(GRID) + 1e-9).all()
     assert (est.mu_hat <= _fuse(data, "paper", rd).mu_hat + 1e-9).all()
+
+
+def _honest(rng, mu, n, *, spacing_m=2.0, sender="v"):
+    """``n`` honest slip-estimate reports (± 0.025) every ``spacing_m`` from 1 m on."""
+    return [FrictionReport.numeric(1.0 + spacing_m * i, mu + rng.uniform(-0.025, 0.025), 0.025,
+                                   position_std_m=0.5, sender=f"{sender}{i % 2}")
+            for i in range(n)]
+
+
+@pytest.mark.parametrize("kernel", AGE_KERNELS)
+def test_consistent_rule_gains_over_the_lowest_report_with_honest_reports(kernel):
+    """Decision 0063: with honest reports the hard bound takes the best of them, not the worst:
+    μ̂ rises further towards μ than with the segment minimum, and stays at or below μ."""
+    rng = np.random.default_rng(3)
+    data = _own(np.full(51, 0.5), np.full(51, 0.1), None, "safe")  # wet class, true μ 0.5
+    reports = _honest(rng, 0.5, 25)
+    hat = {}
+    for bound in REPORT_BOUNDS:
+        rd = report_data(reports, t_now_s=5.0, s_ego_m=0.0, prior=PAPER_PRIOR,
+                         settings=SharedSettings(report_bound=bound, age_kernel=kernel))
+        hat[bound] = _fuse(data, "safe", rd).mu_hat
+    covered = GRID <= 48.0
+    assert (hat["consistent"] <= 0.5 + 1e-9).all()
+    assert hat["consistent"][covered].mean() > hat["lowest"][covered].mean() + 0.01
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    mu_true=st.floats(0.4, 0.6),
+    offset=st.floats(0.0, 0.5),
+    wrong_margin=st.sampled_from([0.001, 0.025, 0.1]),
+    identities=st.integers(1, 30),
+    share=st.floats(0.1, 1.0),
+)
+def test_wrong_reports_lift_safe_mode_at_most_by_an_honest_neighbours_interval(
+    seed, mu_true, offset, wrong_margin, identities, share
+):
+    """Decision 0063, however many identities send the wrong reports (Sybil): an optimistic
+    report whose interval, moved to an honest neighbour, lies wholly above the neighbour's is
+    left out, so offsets beyond both margins and the position terms never lift μ̂ above μ; any
+    other survivor lifts it by at most 2 m_h + 2 G (d_h + δ_h), h the honest report nearest s
+    (here ± 0.025 reports 2 m apart, so d_h ≤ 1 m, δ_h = 0.98 m)."""
+    rng = np.random.default_rng(seed)
+    data = _own(np.full(51, 0.5), np.full(51, 0.1), None, "safe")
+    honest = _honest(rng, mu_true, 25)
+    wrong = [FrictionReport.numeric(r.s_m + rng.uniform(-1.0, 1.0), min(2.0, r.mu + offset),
+                                    wrong_margin, position_std_m=0.5, sender=f"sybil-{i}-{k}")
+             for i, r in enumerate(honest) if rng.random() < share for k in range(identities)]
+    rd = report_data(honest + wrong, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR)
+    hat = _fuse(data, "safe", rd).mu_hat
+    g, delta = 0.01, 1.96 * 0.5
+    assert (hat <= mu_true + 2 * 0.025 + 2 * g * (1.0 + delta) + 1e-9).all()
+    # Each wrong report is a copy of an honest one moved by at most 1 m: wholly above it once
+    # the offset exceeds both margins and the position terms, and then never lifts μ̂ at all.
+    if offset - wrong_margin - 0.025 - g * (1.0 + 2 * delta) > 1e-9:
+        assert (hat <= mu_true + 1e-9).all()
+
+
+def test_conflicts_compare_reports_at_one_place_and_time():
+    """A report 0.2 above a ± 0.025 neighbour made at the same time conflicts with it (not the
+    other way round); 0.02 above does not; made an hour apart, the surface may have changed."""
+    same = [FrictionReport.numeric(10.0, 0.5, 0.025, sender="a"),
+            FrictionReport.numeric(11.0, 0.7, 0.025, sender="b"),
+            FrictionReport.numeric(12.0, 0.52, 0.025, sender="c")]
+    c = conflicts(report_data(same, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR), PAPER_PRIOR.std)
+    assert c.tolist() == [[False, False, False], [True, False, True], [False, False, False]]
+    apart = [FrictionReport.numeric(10.0, 0.5, 0.025, sender="a"),
+             FrictionReport.numeric(11.0, 0.7, 0.025, t_created_s=-3600.0, sender="b")]
+    assert not conflicts(report_data(apart, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR),
+                         PAPER_PRIOR.std).any()
+
+
+def test_age_kernels_agree_at_long_ages_and_differ_at_short_ones():
+    """Matérn-3/2 gains ≈ 1.5 σ² (Δt/τ)² at short ages, the Ornstein–Uhlenbeck σ² Δt/τ; both
+    reach the prior's variance σ² at long ages."""
+    s2, tau = PAPER_PRIOR.std ** 2, 1800.0
+    short = np.array([1.0, 10.0])
+    assert age_variance(short, PAPER_PRIOR.std, tau) == pytest.approx(
+        1.5 * s2 * (short / tau) ** 2, rel=0.02)
+    assert age_variance(short, PAPER_PRIOR.std, tau, "matern12") == pytest.approx(
+        s2 * short / tau, rel=0.01)
+    for kernel in AGE_KERNELS:
+        assert age_variance(np.array([1e7]), PAPER_PRIOR.std, tau, kernel)[0] == pytest.approx(s2)
+
+
+def test_one_miscalibrated_sender_alone_cannot_lift_the_bound():
+    """Decision 0063's corroboration: where only one sender reported (0.06 too high; no other
+    report there to conflict with), it lifts safe mode's μ̂ above μ when one sender suffices,
+    not when a second sender must vouch for the bound."""
+    data = _own(np.full(51, 0.5), np.full(51, 0.1), None, "safe")
+    honest = [FrictionReport.numeric(float(s), 0.49, 0.025, sender="honest")
+              for s in range(0, 15)]
+    biased = [FrictionReport.numeric(float(s), 0.56, 0.025, sender="biased")
+              for s in range(25, 51)]
+    hat = {}
+    for k in (1, 2):
+        rd = report_data(honest + biased, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR,
+                         settings=SharedSettings(corroboration=k))
+        hat[k] = _fuse(data, "safe", rd).mu_hat
+    assert hat[1].max() > 0.5
+    assert (hat[2] <= 0.5 + 1e-9).all()

@@ -14,9 +14,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 REPORT_MU_RANGE = (0.0, 2.0)
 """Allowed μ of a report [-] (the fusion's ``MU_RANGE``)."""
+ReportBound = Literal["consistent", "lowest"]
+"""How safe mode's hard bound combines reports (:class:`SharedSettings`.report_bound)."""
+REPORT_BOUNDS: tuple[str, ...] = get_args(ReportBound)
+AgeKernel = Literal["matern32", "matern12"]
+"""The time kernel a report ages with (:class:`SharedSettings`.age_kernel)."""
+AGE_KERNELS: tuple[str, ...] = get_args(AgeKernel)
 
 
 def check_in(name: str, value: object, lo: float, hi: float, unit: str = "") -> float:
@@ -110,6 +117,11 @@ class SharedSettings:
         Ageing time constant τ [s], in [1, 1e6]: after τ a report has lost 63 % of what it told
         beyond the prior (the only published staleness horizon for slippery-road classes is
         0–120 min; 30 min sits in its middle).
+    age_kernel
+        The time kernel of the ageing (decision 0063): ``"matern32"``, μ changes at a finite
+        rate (weather wets, dries and freezes a surface over minutes), so a few seconds' age
+        costs almost nothing; ``"matern12"``, the rougher Ornstein–Uhlenbeck process of decision
+        0060, whose variance grows in proportion to the age from the first second.
     validity_s
         Reports older than this are dropped [s], in (0, 1e6] (DENM's validityDuration).
     gradient_bound_per_m
@@ -122,14 +134,28 @@ class SharedSettings:
     trust_test
         Whether reports optimistic beyond the combined bounds of the vehicle's own estimate are
         rejected (:func:`screen_reports`).
+    report_bound
+        How safe mode's hard bound combines the reports near an evaluation point (decision
+        0063): ``"consistent"``, the highest lower bound among the reports that agree with the
+        lowest upper bound there (a report wholly above another one's interval is left out);
+        ``"lowest"``, the lowest lower bound (decision 0060; safe against any optimistic report
+        as long as one honest report is near, but it takes every honest report at its worst).
+    corroboration
+        With ``"consistent"``: how many senders must vouch for a bound (the k-th highest of the
+        senders' best bounds counts), in [1, 100]. 1 by default; 2 keeps one miscalibrated
+        sender with a small offset from lifting the bound alone, but then a vehicle with one
+        sender ahead gains nothing (decision 0063 measures both).
     """
 
     tau_s: float = 1800.0
+    age_kernel: AgeKernel = "matern32"
     validity_s: float = 3600.0
     gradient_bound_per_m: float = 0.01
     reach_m: float = 2.0
     sender_cap: float = 3.0
     trust_test: bool = True
+    report_bound: ReportBound = "consistent"
+    corroboration: int = 1
 
     def __post_init__(self) -> None:
         check_in("tau_s", self.tau_s, 1.0, 1e6, " s")
@@ -139,6 +165,17 @@ class SharedSettings:
         check_in("sender_cap", self.sender_cap, 1.0, 1e6)
         if not isinstance(self.trust_test, bool):
             raise ValueError(f"trust_test must be a bool, got {self.trust_test!r}")
+        if isinstance(self.corroboration, bool) or not isinstance(self.corroboration, int):
+            raise ValueError(f"corroboration must be an integer, got {self.corroboration!r}")
+        check_in("corroboration", self.corroboration, 1, 100)
+        if self.age_kernel not in AGE_KERNELS:
+            raise ValueError(
+                f"age_kernel must be one of {list(AGE_KERNELS)}, got {self.age_kernel!r}"
+            )
+        if self.report_bound not in REPORT_BOUNDS:
+            raise ValueError(
+                f"report_bound must be one of {list(REPORT_BOUNDS)}, got {self.report_bound!r}"
+            )
 
 
 DEFAULT_SHARED = SharedSettings()

@@ -87,8 +87,10 @@ def calibrate_shared(
     ages_s: Sequence[float] = DEFAULT_AGES_S,
     wrong_shares: Sequence[float] = DEFAULT_WRONG_SHARES,
     settings: SharedSettings = DEFAULT_SHARED,
+    offset: float = WrongReports().offset,
 ) -> list[SharedCell]:
-    """The calibration of the module docstring: one cell per (age, wrong share, mode).
+    """The calibration of the module docstring: one cell per (age, wrong share, mode);
+    ``offset`` is how optimistic the offset senders and Sybil copies are.
 
     Raises
     ------
@@ -119,9 +121,10 @@ def calibrate_shared(
     cells = []
     for age in ages_s:
         sigma_age = float(np.sqrt(age_variance(np.array([age]), PAPER_PRIOR.std,
-                                               settings.tau_s)[0]))
+                                               settings.tau_s, settings.age_kernel)[0]))
         for share in wrong_shares:
-            wrong = WrongReports(offset_share=share, replay_share=share, sybil_share=share)
+            wrong = WrongReports(offset_share=share, replay_share=share, sybil_share=share,
+                                 offset=offset)
             sent = [corrupt(_reports(rng, s, horizons.mu_gt[b], age, sigma_age), wrong, rng)
                     for b in range(n)]
             for mode in modes:

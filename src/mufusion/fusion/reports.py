@@ -6,11 +6,15 @@ units are a third source beside the camera's classes and the local estimate
 received reports into a validated :class:`ReportData` in the receiver's frame; the fusion with
 them is :mod:`mufusion.fusion.shared_fusion`.
 
-**Age.** Following the spatio-temporal GP view (Särkkä, Solin & Hartikainen 2013: a Matérn-1/2
-kernel in time is an Ornstein–Uhlenbeck process whose variance relaxes to the prior's between
+**Age.** Following the spatio-temporal GP view (Särkkä, Solin & Hartikainen 2013: a Matérn
+kernel in time is a linear state-space process whose variance relaxes to the prior's between
 observations), a report's variance grows with its age Δt towards the prior's::
 
-    σ²(Δt) = σ²_report + σ²_prior · (1 − exp(−Δt / τ)).
+    σ²(Δt) = σ²_report + σ²_prior · (1 − k(Δt)),
+
+k the time kernel's correlation with scale τ (:func:`age_variance`): Matérn-3/2 by default (μ
+changes at a finite rate, decision 0063), the Ornstein–Uhlenbeck Matérn-1/2 of decision 0060 as
+an option (``SharedSettings.age_kernel``).
 
 **Position error.** A report stands for μ at a position known to ± σ_s (1.96 σ_s at 95 %). Within
 one surface segment μ changes by at most a declared G per metre (``gradient_bound_per_m``), so a
@@ -34,6 +38,7 @@ import numpy as np
 
 from mufusion.estimators.shared import (
     DEFAULT_SHARED,
+    AgeKernel,
     FrictionReport,
     SharedSettings,
     check_in,
@@ -42,8 +47,16 @@ from mufusion.fusion.data import MARGIN_RANGE, NOISE_STD_FLOOR, POSITION_RANGE_M
 from mufusion.fusion.prior import Z95, GPPrior
 
 
-def age_variance(age_s: np.ndarray, prior_std: float, tau_s: float) -> np.ndarray:
-    """Variance a report gains by its age [-²]: ``σ²_prior · (1 − exp(−Δt / τ))``.
+def age_variance(
+    age_s: np.ndarray, prior_std: float, tau_s: float, kernel: AgeKernel = "matern32"
+) -> np.ndarray:
+    """Variance a report gains by its age [-²]: ``σ²_prior · (1 − k(Δt))``, k the time kernel's
+    correlation at lag Δt with scale τ (decision 0063):
+
+    * ``"matern32"``: ``k = (1 + √3 Δt/τ) · exp(−√3 Δt/τ)``, a once mean-square differentiable
+      process (μ changes at a finite rate): the gain grows as ``1.5 σ² (Δt/τ)²`` at short ages;
+    * ``"matern12"``: ``k = exp(−Δt/τ)``, the Ornstein–Uhlenbeck process of decision 0060: the
+      gain grows as ``σ² Δt/τ``, as if μ diffused from second to second.
 
     Negative ages (a report stamped in the receiver's future: clock skew) count as 0.
 
@@ -51,9 +64,16 @@ def age_variance(age_s: np.ndarray, prior_std: float, tau_s: float) -> np.ndarra
     --------
     >>> round(float(age_variance(np.array([1e9]), 0.2, 600.0)[0]), 6)
     0.04
+    >>> a = np.array([10.0])
+    >>> bool(age_variance(a, 0.2, 1800.0) < age_variance(a, 0.2, 1800.0, "matern12"))
+    True
     """
     age = np.maximum(np.asarray(age_s, dtype=float), 0.0)
-    return prior_std * prior_std * -np.expm1(-age / tau_s)
+    if kernel == "matern12":
+        return prior_std * prior_std * -np.expm1(-age / tau_s)
+    r = np.sqrt(3.0) * age / tau_s
+    # 1 − (1 + r) e^(−r) = −expm1(−r) − r e^(−r), without cancellation at small r.
+    return prior_std * prior_std * (-np.expm1(-r) - r * np.exp(-r))
 
 
 @dataclass(frozen=True)
@@ -68,8 +88,10 @@ class ReportData:
         Most probable μ [-], shape ``(n,)``.
     noise_sd
         GP noise std [-]: own noise, age, position error (``G σ_s``) and the sender cap.
-    lower
-        Aged lower bound on μ at the report's position [-] (no position term).
+    lower, upper
+        Aged lower and upper bounds on μ at the report's position [-] (no position term).
+    lower_sd, upper_sd
+        The sender's own 95 % half-widths below and above ``mu`` divided by 1.96 [-] (not aged).
     position_bound_m
         95 % position error 1.96 σ_s [m].
     sender
@@ -84,6 +106,9 @@ class ReportData:
     mu: np.ndarray
     noise_sd: np.ndarray
     lower: np.ndarray
+    upper: np.ndarray
+    lower_sd: np.ndarray
+    upper_sd: np.ndarray
     position_bound_m: np.ndarray
     sender: np.ndarray
     age_s: np.ndarray
@@ -103,6 +128,7 @@ class ReportData:
         """The reports where ``keep`` is True (same settings)."""
         return ReportData(
             self.s_m[keep], self.mu[keep], self.noise_sd[keep], self.lower[keep],
+            self.upper[keep], self.lower_sd[keep], self.upper_sd[keep],
             self.position_bound_m[keep], self.sender[keep], self.age_s[keep], self.settings,
         )
 
@@ -161,18 +187,23 @@ def report_data(
     rel, age = rel[keep], age[keep]
     mu = np.array([r.mu for r in kept], dtype=float)
     own_lower = np.array([r.lower_mu for r in kept], dtype=float)
+    own_upper = np.array([r.upper_mu for r in kept], dtype=float)
     margin = np.array([r.margin for r in kept], dtype=float)
     pos_sd = np.array([r.position_std_m for r in kept], dtype=float)
     ids: dict[str, int] = {}
     sender = np.array([ids.setdefault(r.sender, len(ids)) for r in kept], dtype=np.int64)
-    aged = age_variance(age, prior.std, settings.tau_s)
+    aged = age_variance(age, prior.std, settings.tau_s, settings.age_kernel)
     own_sd = margin / Z95
     g_pos = settings.gradient_bound_per_m * pos_sd
     var = (own_sd * own_sd + aged + g_pos * g_pos) * _sender_inflation(
         rel, sender, prior.length_scale_m, settings.sender_cap
     )
     noise_sd = np.clip(np.sqrt(var), NOISE_STD_FLOOR, MARGIN_RANGE[1] / Z95)
-    # The lower side ages like the whole report: mu − 1.96 sqrt(((mu − lower)/1.96)² + σ²_age).
+    # Each side ages like the whole report: mu ∓ 1.96 sqrt(((mu − bound)/1.96)² + σ²_age).
     low_sd = (mu - own_lower) / Z95
+    up_sd = (own_upper - mu) / Z95
     lower = mu - Z95 * np.sqrt(low_sd * low_sd + aged)
-    return ReportData(rel, mu, noise_sd, lower, Z95 * pos_sd, sender, age, settings)
+    upper = mu + Z95 * np.sqrt(up_sd * up_sd + aged)
+    return ReportData(
+        rel, mu, noise_sd, lower, upper, low_sd, up_sd, Z95 * pos_sd, sender, age, settings
+    )

@@ -18,15 +18,19 @@ received reports (:class:`~mufusion.fusion.reports.ReportData`):
    elsewhere: a report that no own estimate confirms (none near it, or on the other side of a
    class change) never raises μ̂, and an old high-μ report, whose aged lower bound drops towards
    the prior's, raises it only as far as its own aged bound allows (step 4) in safe mode.
-4. **Safe mode's hard bound with reports.** ``H(s) = max(H_own(s), H_rep(s))`` where some
-   report confirms at s, else ``H_own(s)``, with
-   ``H_rep(s) = min_r lower_r(Δt) − min_c G·(|s − s_c| + δ_c)``, r over the kept reports within
-   ``reach_m + δ_r`` of s or in its class segment, c over those that confirm at s. Under the
-   premise it is at most ``lower_c − G·(|s − s_c| + δ_c) ≤ μ(s)`` for the confirming report c
-   of the smallest term. The minimum of the bounds, not the maximum, although each is valid
-   under the premise: one optimistic report (or any number of Sybil identities) cannot lift H
-   above what the honest reports in the segment allow. μ̂ = min(one-sided paper lower bound, H)
-   on the data, and also at most the one-sided grouped lower bound beyond them.
+4. **Safe mode's hard bound with reports.** ``H(s) = max(H_own(s), H_rep(s))``. With
+   ``report_bound = "consistent"`` (decision 0063, the default), ``H_rep(s)`` is the k-th
+   highest (``corroboration``, default 1) over senders of each sender's best
+   ``lower_c(Δt) − G·(|s − s_c| + δ_c)``, c over the reports an own datum confirms in s's class
+   segment (at any distance: the position term prices it) that conflict with no report of that
+   segment (:func:`conflicts`: c's lower bound, moved to the other report's place and creation
+   time, above its upper bound). Under the premise each term is ≤ μ(s); a wrong report that
+   survives lifts H by at most the interval of the honest report nearest s, ``2 m_h + 2 G·(|s −
+   s_h| + δ_h)``, however many identities send it. With ``"lowest"`` (decision 0060), where a
+   report confirms at s, ``H_rep(s) = min_r lower_r(Δt) − min_c G·(|s − s_c| + δ_c)``, r over the
+   kept reports near s or in its segment: no optimistic report lifts it while one honest report
+   is near, but every honest report counts at its worst. μ̂ = min(one-sided paper lower bound,
+   H) on the data, and also at most the one-sided grouped lower bound beyond them.
 """
 
 from __future__ import annotations
@@ -39,7 +43,7 @@ from mufusion.fusion.assembly import LOCAL_GROUP
 from mufusion.fusion.data import FusedEstimate, FusionData, clip_to_band
 from mufusion.fusion.engine import PosteriorEngine, noise_sd_of
 from mufusion.fusion.prior import Z95, GPPrior
-from mufusion.fusion.reports import ReportData
+from mufusion.fusion.reports import ReportData, age_variance
 from mufusion.fusion.safe import grouped_noise, hard_bound_envelope
 
 
@@ -112,9 +116,10 @@ def screen_reports(own: FusionData, reports: ReportData) -> ReportScreen:
 
 
 def _report_bound(
-    own: FusionData, r: ReportData, confirmers: np.ndarray, e: np.ndarray
+    own: FusionData, r: ReportData, confirmers: np.ndarray, e: np.ndarray, prior_std: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``H_rep`` at ``e`` and where some report confirms (module docstring, steps 2 and 4)."""
+    """``H_rep`` at ``e`` and where some report confirms (module docstring, steps 2 and 4;
+    ``prior_std`` ages the reports towards each other's creation time)."""
     g = r.settings.gradient_bound_per_m
     dist = np.abs(e[:, None] - r.s_m[None, :])  # (m, n)
     within = dist <= r.settings.reach_m + r.position_bound_m[None, :]
@@ -131,14 +136,66 @@ def _report_bound(
     one_segment = inside & (changes[i1] == changes[i0])
     confirms = within & confirmers[None, :] & one_segment
     confirmed = confirms.any(axis=1)
-    # The lowest bound of every kept report near s or in its class segment, less the smallest
-    # position term of a *confirming* report c: ≤ lower_c − G·(|s − s_c| + δ_c) ≤ μ(s) under the
-    # premise (decision 0060), and no report, nor any number of identities, lifts it above the
-    # lowest report of the segment.
-    lowest = np.where(within | one_segment, r.lower[None, :], np.inf).min(axis=1)
-    shift = np.where(confirms, g * (dist + r.position_bound_m[None, :]), np.inf).min(axis=1)
-    h_rep = np.where(confirmed, lowest - np.where(confirmed, shift, 0.0), -np.inf)
-    return h_rep, confirmed
+    term = g * (dist + r.position_bound_m[None, :])  # position term of each report at each s
+    if r.settings.report_bound == "lowest":
+        # The lowest bound of every kept report near s or in its class segment, less the
+        # smallest position term of a *confirming* report c: ≤ lower_c − G·(|s − s_c| + δ_c) ≤
+        # μ(s) under the premise (decision 0060); no report, nor any number of identities,
+        # lifts it above the lowest report of the segment.
+        lowest = np.where(within | one_segment, r.lower[None, :], np.inf).min(axis=1)
+        shift = np.where(confirms, term, np.inf).min(axis=1)
+        return np.where(confirmed, lowest - np.where(confirmed, shift, 0.0), -np.inf), confirmed
+    # "consistent" (decision 0063): a report in conflict with another one of s's segment (its
+    # lower bound, moved to the other's place and time, above the other's upper bound) is left
+    # out — the two cannot both be right, and the higher one is the harmful one if wrong. Of the
+    # rest, the highest lower bound aged to now and moved to s: ≤ μ(s) for an honest report; a
+    # wrong one that survives is within one honest report's own interval of it.
+    # Every report an own datum confirms in s's segment counts, however far: its position term
+    # prices the distance, and a cut-off at the reach would leave a hole at the class bound
+    # wherever one packet is lost or one report is left out.
+    excluded = (one_segment.astype(np.int64) @ conflicts(r, prior_std).T.astype(np.int64)) > 0
+    agree = confirmers[None, :] & one_segment & ~excluded
+    return corroborated(np.where(agree, r.lower[None, :] - term, -np.inf), r.sender,
+                        r.settings.corroboration), confirmed
+
+
+def corroborated(bounds: np.ndarray, sender: np.ndarray, k: int) -> np.ndarray:
+    """Per row, the k-th highest of the senders' best bounds (−inf with fewer than k senders):
+    a bound counts once k senders vouch for at least as much, so one miscalibrated sender alone
+    cannot lift H (decision 0063). ``bounds`` (m, n) with −inf where a report does not count.
+
+    Examples
+    --------
+    >>> b = np.array([[0.40, 0.45, 0.50, -np.inf]])
+    >>> corroborated(b, np.array([0, 0, 1, 2]), 2).tolist()
+    [0.45]
+    """
+    order = np.argsort(sender, kind="stable")
+    s = sender[order]
+    starts = np.flatnonzero(np.concatenate([[True], s[1:] != s[:-1]]))
+    if starts.size < k:
+        return np.full(bounds.shape[0], -np.inf)
+    best = np.maximum.reduceat(bounds[:, order], starts, axis=1)
+    return np.sort(best, axis=1)[:, -k]
+
+
+def conflicts(r: ReportData, prior_std: float) -> np.ndarray:
+    """``C[w, h]``: report w's lower bound, moved to h's position and creation time, lies above
+    h's own upper bound (decision 0063), shape ``(n, n)``.
+
+    Moved: the sender's lower half-width aged by the time between the two reports
+    (:func:`~mufusion.fusion.reports.age_variance`) and less ``G·(|s_w − s_h| + δ_w + δ_h)``.
+    """
+    settings = r.settings
+    gap_s = np.abs(r.age_s[:, None] - r.age_s[None, :])
+    aged = age_variance(gap_s, prior_std, settings.tau_s, settings.age_kernel)
+    low_w = r.mu[:, None] - Z95 * np.sqrt(r.lower_sd[:, None] ** 2 + aged)
+    moved = settings.gradient_bound_per_m * (
+        np.abs(r.s_m[:, None] - r.s_m[None, :])
+        + r.position_bound_m[:, None] + r.position_bound_m[None, :]
+    )
+    up_h = r.mu[None, :] + Z95 * r.upper_sd[None, :]
+    return low_w - moved > up_h + 1e-12
 
 
 def _latent_lower(
@@ -193,7 +250,7 @@ def fuse_shared(
         _, g_std, g_lower = _latent_lower(
             engine, prior, s_all, e, resid, sd_all, r.sender)
         return FusedEstimate(e, mean, g_std, g_lower, clip_to_band(mu_hat, top))
-    h_rep, confirmed = _report_bound(own, r, confirmers, e)
+    h_rep, confirmed = _report_bound(own, r, confirmers, e, prior.std)
     if mode == "paper":
         one_sided = np.where(confirmed, lower, np.minimum(lower, without.lower))
         return FusedEstimate(e, mean, std, lower, clip_to_band(one_sided, top))
@@ -209,7 +266,7 @@ def fuse_shared(
     paper_used = np.where(confirmed, lower, np.minimum(lower, paper_without))
     grouped_used = np.where(confirmed, g_lower, np.minimum(g_lower, without.lower))
     h_own, outside = hard_bound_envelope(own.s_m, own.mu, own.margin, e)
-    bound = np.where(confirmed, np.maximum(h_own, h_rep), h_own)
+    bound = np.maximum(h_own, h_rep)  # h_rep is −inf where no report counts
     mu_hat = np.minimum(paper_used, bound)
     mu_hat = np.where(outside, np.minimum(mu_hat, grouped_used), mu_hat)
     return FusedEstimate(e, g_mean, g_std, g_lower, clip_to_band(mu_hat, top))

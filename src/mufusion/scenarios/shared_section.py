@@ -20,7 +20,13 @@ from pydantic import model_validator
 
 from mufusion.estimators.comm import CommModel, ReportInbox, transmit
 from mufusion.estimators.misbehaviour import WrongReports, corrupt
-from mufusion.estimators.shared import DEFAULT_SHARED, FrictionReport, SharedSettings
+from mufusion.estimators.shared import (
+    DEFAULT_SHARED,
+    AgeKernel,
+    FrictionReport,
+    ReportBound,
+    SharedSettings,
+)
 from mufusion.scenarios.sections import _Strict
 
 _S, _C, _W = DEFAULT_SHARED, CommModel(), WrongReports()
@@ -35,11 +41,14 @@ class SharedSection(_Strict):
     supplies them."""
     # Defaults are the records' own (each number defined once).
     tau_s: float = _S.tau_s
+    age_kernel: AgeKernel = _S.age_kernel
     validity_s: float = _S.validity_s
     gradient_bound_per_m: float = _S.gradient_bound_per_m
     reach_m: float = _S.reach_m
     sender_cap: float = _S.sender_cap
     trust_test: bool = _S.trust_test
+    report_bound: ReportBound = _S.report_bound
+    corroboration: int = _S.corroboration
     rate_hz: float = _C.rate_hz
     latency_s: float = _C.latency_s
     jitter_s: float = _C.jitter_s
@@ -74,9 +83,10 @@ class SharedSection(_Strict):
     def settings(self) -> SharedSettings:
         """How the fusion treats the reports."""
         return SharedSettings(
-            tau_s=self.tau_s, validity_s=self.validity_s,
+            tau_s=self.tau_s, age_kernel=self.age_kernel, validity_s=self.validity_s,
             gradient_bound_per_m=self.gradient_bound_per_m, reach_m=self.reach_m,
             sender_cap=self.sender_cap, trust_test=self.trust_test,
+            report_bound=self.report_bound, corroboration=self.corroboration,
         )
 
     def comm(self) -> CommModel:
