@@ -153,7 +153,14 @@ def _report_bound(
     # Every report an own datum confirms in s's segment counts, however far: its position term
     # prices the distance, and a cut-off at the reach would leave a hole at the class bound
     # wherever one packet is lost or one report is left out.
-    excluded = (one_segment.astype(np.int64) @ conflicts(r, prior_std).T.astype(np.int64)) > 0
+    w, h = conflict_pairs(r, prior_std)
+    excluded = np.zeros_like(one_segment)
+    if w.size:
+        # excluded[s, w] = any over the pairs (w, h) of one_segment[s, h]: grouped by w.
+        order = np.argsort(w, kind="stable")
+        w, h = w[order], h[order]
+        starts = np.flatnonzero(np.concatenate([[True], w[1:] != w[:-1]]))
+        excluded[:, w[starts]] = np.logical_or.reduceat(one_segment[:, h], starts, axis=1)
     agree = confirmers[None, :] & one_segment & ~excluded
     return corroborated(np.where(agree, r.lower[None, :] - term, -np.inf), r.sender,
                         r.settings.corroboration), confirmed
@@ -186,16 +193,27 @@ def conflicts(r: ReportData, prior_std: float) -> np.ndarray:
     Moved: the sender's lower half-width aged by the time between the two reports
     (:func:`~mufusion.fusion.reports.age_variance`) and less ``G·(|s_w − s_h| + δ_w + δ_h)``.
     """
+    w, h = conflict_pairs(r, prior_std)
+    out = np.zeros((r.size, r.size), dtype=bool)
+    out[w, h] = True
+    return out
+
+
+def conflict_pairs(r: ReportData, prior_std: float) -> tuple[np.ndarray, np.ndarray]:
+    """The index pairs (w, h) of :func:`conflicts` (few: only wrong reports conflict)."""
     settings = r.settings
-    gap_s = np.abs(r.age_s[:, None] - r.age_s[None, :])
-    aged = age_variance(gap_s, prior_std, settings.tau_s, settings.age_kernel)
-    low_w = r.mu[:, None] - Z95 * np.sqrt(r.lower_sd[:, None] ** 2 + aged)
     moved = settings.gradient_bound_per_m * (
         np.abs(r.s_m[:, None] - r.s_m[None, :])
         + r.position_bound_m[:, None] + r.position_bound_m[None, :]
     )
-    up_h = r.mu[None, :] + Z95 * r.upper_sd[None, :]
-    return low_w - moved > up_h + 1e-12
+    room = (r.mu + Z95 * r.upper_sd)[None, :] + moved + 1e-12  # h's upper bound, moved to w
+    # Ageing only widens w's interval: pairs that do not conflict unaged never do, so the
+    # ageing (the costly part) is evaluated on the few candidate pairs only.
+    w, h = np.nonzero((r.mu - Z95 * r.lower_sd)[:, None] > room)
+    aged = age_variance(np.abs(r.age_s[w] - r.age_s[h]), prior_std, settings.tau_s,
+                        settings.age_kernel)
+    keep = r.mu[w] - Z95 * np.sqrt(r.lower_sd[w] ** 2 + aged) > room[w, h]
+    return w[keep], h[keep]
 
 
 def _latent_lower(
