@@ -4,6 +4,10 @@ The problem: grid 0, 1, …, 50 m; the local estimate (0.425 ± 0.025) at s < 5 
 (0.5 ± 0.1) elsewhere. Each call is timed alone; the medians are reported. Also the batched form on
 1000 horizons with different class changes, in both modes.
 
+With shared reports (issue 40): safe mode with 25 and 250 reports (a fifth of them 0.2 too high,
+ages up to 60 s), the best consistent report (decision 0063, the default) against the segment's
+lowest report (decision 0060), the rule a user would otherwise pick.
+
 Run: ``python benchmarks/fusion.py``. Prints a table and a final JSON line; numbers go to
 docs/performance.md, section "## Fusion".
 """
@@ -21,6 +25,7 @@ import numpy as np
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel
 
+from mufusion.estimators.shared import FrictionReport, SharedSettings
 from mufusion.fusion import (
     DEFAULT_GRID_M,
     PAPER_PRIOR,
@@ -28,9 +33,12 @@ from mufusion.fusion import (
     assemble_inputs,
     fuse,
     fuse_batch,
+    report_data,
 )
 
 N_OURS = 2000
+N_SHARED = 200
+REPORT_COUNTS = (25, 250)
 N_SKLEARN = 200
 N_BATCH = 1000
 BATCH_REPEATS = 5
@@ -82,6 +90,25 @@ def _batch_us(grid, mu, margin, groups, mode: str) -> float:
     return statistics.median(times) / N_BATCH * 1e6
 
 
+def _shared_us(grid, data, n_reports: int, rule: str) -> float:
+    rng = np.random.default_rng(n_reports)
+    reports = [
+        FrictionReport.numeric(
+            float(rng.uniform(0.0, 50.0)), 0.5 + (0.2 if i % 5 == 0 else 0.0), 0.025,
+            t_created_s=-float(rng.uniform(0.0, 60.0)), position_std_m=0.5,
+            sender=f"v{i % max(2, n_reports // 5)}",
+        )
+        for i in range(n_reports)
+    ]
+    rd = report_data(reports, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR,
+                     settings=SharedSettings(report_bound=rule))  # type: ignore[arg-type]
+    return _median_us(
+        lambda: fuse(data.s_m, data.mu, data.margin, PAPER_PRIOR, grid, groups=data.groups,
+                     mode="safe", reports=rd),
+        N_SHARED,
+    )
+
+
 def main() -> None:
     grid = DEFAULT_GRID_M
     data = assemble_inputs(grid, np.full(grid.size, 0.5), np.full(grid.size, 0.1), local_mu=0.425)
@@ -102,6 +129,11 @@ def main() -> None:
     t_batch = _batch_us(grid, *_batch_inputs(np.random.default_rng(0)), "paper")
     t_batch_safe = _batch_us(grid, *_batch_inputs(np.random.default_rng(0), "safe"), "safe")
 
+    safe_data = assemble_inputs(grid, np.full(grid.size, 0.5), np.full(grid.size, 0.1),
+                                local_mu=0.425, mode="safe")
+    shared = {(n, rule): _shared_us(grid, safe_data, n, rule)
+              for n in REPORT_COUNTS for rule in ("consistent", "lowest")}
+
     rows = [
         ("fuse, paper mode", t_paper),
         ("fuse, safe mode", t_safe),
@@ -109,6 +141,9 @@ def main() -> None:
         ("scikit-learn GaussianProcessRegressor fit+predict", t_sklearn),
         (f"fuse_batch, paper, per horizon ({N_BATCH} horizons)", t_batch),
         (f"fuse_batch, safe, per horizon ({N_BATCH} horizons)", t_batch_safe),
+    ] + [
+        (f"fuse, safe, {n} reports, {rule}", shared[(n, rule)])
+        for n in REPORT_COUNTS for rule in ("consistent", "lowest")
     ]
     print(
         f"machine: nproc={os.cpu_count()}, python {platform.python_version()}, "
@@ -119,6 +154,9 @@ def main() -> None:
     for name, value in rows:
         print(f"{name:<56} {value:>10.1f}")
     print(f"speed-up vs scikit-learn (paper mode): {t_sklearn / t_paper:.0f}x")
+    for n in REPORT_COUNTS:
+        ratio = shared[(n, "consistent")] / shared[(n, "lowest")]
+        print(f"{n} reports: consistent / lowest = {ratio:.2f}")
     result = {
         "median_fuse_us": round(t_paper, 2),
         "median_fuse_safe_us": round(t_safe, 2),
@@ -128,6 +166,7 @@ def main() -> None:
         "batched_us_per_horizon": round(t_batch, 2),
         "batched_safe_us_per_horizon": round(t_batch_safe, 2),
         "max_abs_diff_vs_sklearn": max_diff,
+        **{f"median_safe_{n}_reports_{rule}_us": round(v, 1) for (n, rule), v in shared.items()},
     }
     sys.stdout.write(json.dumps(result) + "\n")
 
