@@ -33,6 +33,7 @@ from mufusion.planner.ocp import (
     N_PARAMS,
     Param,
     PlannerConfig,
+    constraint_bounds,
     constraint_expressions,
     longitudinal_force_bounds_n,
     polygon_rows,
@@ -95,6 +96,10 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "hpipm_mode": hpipm_mode,
             "steering_rate_limit": config.steering_rate_limit,
             "load_transfer": config.load_transfer,
+            # The parameter vector's layout (planner/ocp.py's Param) and the rows after the
+            # polygons' (the front braking's, ocp.constraint_bounds).
+            "n_params": N_PARAMS,
+            "front_brake_rows": 1,
             "utilization": config.utilization_factor,
             # The slack penalties are written into the generated problem (ocp.cost.zl …).
             "slack_penalties": [config.weights.slack_l1, config.weights.slack_l2],
@@ -349,8 +354,7 @@ def _describe(
     )
     ocp.constraints.lbu, ocp.constraints.ubu = _input_bounds(params, config)
     rows = polygon_rows(ns, load_transfer=config.load_transfer)
-    ocp.constraints.lh = np.full(rows.count, rows.lower)
-    ocp.constraints.uh = np.full(rows.count, rows.upper)
+    ocp.constraints.lh, ocp.constraints.uh = constraint_bounds(rows)
     # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
     # follows the state, which at stage 0 is fixed, so the rear polygon is soft. acados
     # orders a stage's slacks as the soft bounds (d) first, then the soft h rows, which is

@@ -108,12 +108,16 @@ class CasadiBackend:
             g.append(hk[:m])
             lbg += [rows.lower] * m
             ubg += [rows.upper] * m
-            g.append(hk[m:] + S_rl[:, k])
+            g.append(hk[m:2 * m] + S_rl[:, k])
             lbg += [rows.lower] * m
             ubg += [np.inf] * m
-            g.append(hk[m:] - S_ru[:, k])
+            g.append(hk[m:2 * m] - S_ru[:, k])
             lbg += [-np.inf] * m
             ubg += [rows.upper] * m
+            # The front braking's row (hard).
+            g.append(hk[2 * m:])
+            lbg += [-np.inf]
+            ubg += [0.0]
             # d bounds at stage k+1 (softened); terminal slacks carry no dt factor.
             if k < n - 1:
                 scale, z1, z2 = dt, pen.linear_stage[corridor], pen.quadratic_stage[corridor]

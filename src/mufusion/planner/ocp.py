@@ -11,7 +11,6 @@ configures the problem is apart, in :mod:`mufusion.planner.config`.
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Any
@@ -24,7 +23,8 @@ from mufusion.planner.config import PlannerConfig as PlannerConfig
 from mufusion.planner.config import PlannerMode as PlannerMode
 from mufusion.planner.config import PlannerObstacle as PlannerObstacle
 from mufusion.planner.config import PlausibilityLimits as PlausibilityLimits
-from mufusion.planner.passing import passing_left
+from mufusion.planner.corridor import MAX_SWING_HEADING_RAD as MAX_SWING_HEADING_RAD
+from mufusion.planner.corridor import lateral_corridor as lateral_corridor
 from mufusion.planner.plan import StageParameters
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
@@ -56,6 +56,9 @@ class Param(IntEnum):
     # loads of the plan's own longitudinal forces; the radii above (at the guess's loads) then
     # only scale the rows.
     utilized_friction = 4
+    # λ μ̂ where the front brake torque commanded at the stage's start lands (the row bounding
+    # the front braking, :func:`constraint_expressions`).
+    utilized_friction_front_brake = 5
 
 
 N_PARAMS = len(Param)
@@ -64,6 +67,9 @@ N_PARAMS = len(Param)
 # :mod:`mufusion.planner.safeguards` for non-finite ones).
 MU_MIN = 0.05
 MU_MAX = 2.0
+
+INACTIVE_BRAKE_FRICTION = 2.0 * MU_MAX
+"""μ̂ of the front braking's row where it does not bind (above any polygon's)."""
 
 MIN_LOAD_SHARE = 0.05
 """Floor of an axle's normal load in the polygons, as a share of the weight."""
@@ -110,18 +116,26 @@ def stage_parameters(
     params: VehicleParams,
     utilization_factor: float,
     stiffness_table: SurfaceTireTable | None = None,
+    axle_lag_s: float | None = None,
 ) -> StageParameters:
     """Per-stage parameters from the initial guess (predicted ``s_k`` and ``a_x,k``).
 
     ``stiffness_table``: ``None`` keeps the rear stiffness of the vehicle's tire; a table makes
     it follow each stage's μ̂ (``PlannerConfig.stiffness = "from_mu_hat"``).
+    ``axle_lag_s``: ``None`` bounds the front braking by the polygon only (the centre of
+    gravity's μ̂ at ``s_k``); a torque lag [s] also bounds it by the lowest μ̂ under the front
+    axle from the stage's start to where a brake torque commanded then lands (``v_k`` times the
+    lag further, :func:`axle_friction`).
 
     Returns a :class:`StageParameters`: arrays of length N and the stacked ``p``.
     """
     s_k = guess_states[:-1, State.s]
     fzf, fzr = axle_loads_n(guess_inputs, params)
-    # np.minimum(np.maximum(...)): np.clip's values (non-zero bounds) at less overhead.
-    mu = np.minimum(np.maximum(np.asarray(mu_hat_of_s(s_k), dtype=float), MU_MIN), MU_MAX)
+    mu = mu_brake = _clipped_mu(mu_hat_of_s(s_k))
+    if axle_lag_s is not None:
+        reach = np.maximum(guess_states[:-1, State.vx], 0.0) * axle_lag_s
+        mu_brake = np.minimum(
+            mu, axle_friction(mu_hat_of_s, s_k + params.cog_to_front_axle_m, reach))
     kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
     c_r = rear_cornering_stiffness_n_per_rad(
         params, fzr, utilization_factor, mu_hat=mu, table=stiffness_table
@@ -135,7 +149,40 @@ def stage_parameters(
     p[:, Param.radius_rear] = radius_rear
     utilized = utilization_factor * mu
     p[:, Param.utilized_friction] = utilized
-    return StageParameters(mu, fzf, fzr, radius_front, radius_rear, utilized, c_r, kappa, p)
+    # Where the front brakes on the stage's μ̂ the row would duplicate the polygon's braking
+    # face (a degenerate QP: the authors' turn left its lane by 1.85 m instead of 0.27 m with
+    # it); it is loosened out of reach there.
+    p[:, Param.utilized_friction_front_brake] = utilization_factor * np.where(
+        mu_brake < mu, mu_brake, INACTIVE_BRAKE_FRICTION)
+    return StageParameters(mu, fzf, fzr, radius_front, radius_rear, utilized, c_r, kappa, p,
+                           mu_brake)
+
+
+def _clipped_mu(mu: Any) -> np.ndarray:
+    """μ̂ clipped to [:data:`MU_MIN`, :data:`MU_MAX`]."""
+    # np.minimum(np.maximum(...)): np.clip's values (non-zero bounds) at less overhead.
+    return np.minimum(np.maximum(np.asarray(mu, dtype=float), MU_MIN), MU_MAX)
+
+
+def axle_friction(mu_hat_of_s, axle_s_m: np.ndarray, reach_m: np.ndarray) -> np.ndarray:
+    """The lowest μ̂ an axle meets from ``axle_s_m`` to ``reach_m`` further (at both ends and
+    the middle), clipped like the stages' μ̂.
+
+    Where the friction drops, a stage's forces act on the axles, not at the centre of gravity,
+    and the wheel torques follow their command with a lag: braking planned at the CoG's μ̂ with
+    the front axle just short of a drop lands on the low friction (docs/decisions/0062).
+
+    Examples
+    --------
+    >>> mu = lambda s: np.where(np.asarray(s) < 10.0, 0.9, 0.3)
+    >>> axle_friction(mu, np.array([8.0, 9.5]), np.array([1.0, 1.0])).tolist()
+    [0.9, 0.3]
+    """
+    s = np.asarray(axle_s_m, dtype=float)
+    reach = np.asarray(reach_m, dtype=float)
+    lowest = np.minimum(np.minimum(mu_hat_of_s(s), mu_hat_of_s(s + 0.5 * reach)),
+                        mu_hat_of_s(s + reach))
+    return _clipped_mu(lowest)
 
 
 def plan_polygon_radii_n(
@@ -150,68 +197,6 @@ def plan_polygon_radii_n(
         return stage.radius_front_n, stage.radius_rear_n
     fzf, fzr = axle_loads_n(inputs, params)
     return stage.utilized_friction * fzf, stage.utilized_friction * fzr
-
-
-MAX_SWING_HEADING_RAD = 0.1
-"""Largest heading error whose corner swing :func:`lateral_corridor` takes off the lane bounds."""
-
-
-def lateral_corridor(
-    guess_states: np.ndarray,
-    obstacles: Sequence[PlannerObstacle],
-    lane_d_min_m: float,
-    lane_d_max_m: float,
-    params: VehicleParams,
-    margin_m: float,
-    curvature_1pm: np.ndarray | None = None,
-    dt_s: float = 0.0,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds on the reference point's ``d`` per stage 1..N, shape ``(N,)`` each.
-
-    ``lane_d_min_m``/``lane_d_max_m`` bound the reference point itself (the caller has already
-    shrunk the lane or road edges by half the vehicle width, TAMP framework). On a curve of
-    curvature κ (``curvature_1pm`` at the stages' predicted positions) the body's ends, aligned
-    with the lane at its middle, stick out of the curve by ``|κ| (l/2)² / 2``; that much is taken
-    off the outer bound (right of a left curve, left of a right curve). A heading error Δψ (the
-    guess's, as RTI linearises there) swings the front corners by ``a_f sin Δψ`` and the rear ones
-    by ``a_r sin Δψ`` the other way (``a_f``, ``a_r``: CoG to the body's front and rear); the
-    bounds shrink by that too. An obstacle
-    overlapping the vehicle's footprint at the guess's predicted ``s_k`` closes the side opposite
-    to the guess's ``d_k`` (pass left if the guess is left of the obstacle's centre), which keeps
-    the problem convex, unless only the other side has room (:func:`~.passing.passing_left`).
-    A moving obstacle is where it is predicted at each stage's time ``k · dt_s``
-    (:meth:`PlannerObstacle.s_at_stages`).
-    """
-    s_k = guess_states[1:, State.s]
-    d_k = guess_states[1:, State.d]
-    half_w = 0.5 * params.width_m
-    lo = np.full(s_k.shape, float(lane_d_min_m))
-    hi = np.full(s_k.shape, float(lane_d_max_m))
-    half_len = 0.5 * params.length_m
-    if curvature_1pm is not None:
-        kappa = np.asarray(curvature_1pm, dtype=float) * np.ones_like(s_k)
-        bulge = 0.5 * np.abs(kappa) * half_len**2
-        hi = np.where(kappa < 0.0, hi - bulge, hi)
-        lo = np.where(kappa > 0.0, lo + bulge, lo)
-    a_front, a_rear = params.cog_to_body_front_m, params.cog_to_body_rear_m
-    # Only lane-keeping headings count in full: in an evasive manoeuvre the heading reaches
-    # 0.3-0.5 rad and the full swing (> 1 m each side) would close the corridor the manoeuvre
-    # needs; the obstacle margin covers the corners there.
-    sin_dpsi = np.sin(np.minimum(np.maximum(guess_states[1:, State.dpsi],
-                                            -MAX_SWING_HEADING_RAD), MAX_SWING_HEADING_RAD))
-    hi = hi - a_front * np.maximum(sin_dpsi, 0.0) - a_rear * np.maximum(-sin_dpsi, 0.0)
-    lo = lo + a_front * np.maximum(-sin_dpsi, 0.0) + a_rear * np.maximum(sin_dpsi, 0.0)
-    # A corridor too tight for the vehicle leaves its midpoint rather than an empty interval.
-    mid = 0.5 * (lo + hi)
-    lo, hi = np.minimum(lo, mid), np.maximum(hi, mid)
-    for ob in obstacles:
-        s_ob = ob.s_at_stages(s_k.shape, dt_s)
-        overlap = np.abs(s_k - s_ob) < half_len + 0.5 * ob.length_m + margin_m
-        clear = 0.5 * ob.width_m + half_w + margin_m
-        left = passing_left(d_k, ob.d_m, clear, lo, hi)
-        lo = np.where(overlap & left, np.maximum(lo, ob.d_m + clear), lo)
-        hi = np.where(overlap & ~left, np.minimum(hi, ob.d_m - clear), hi)
-    return lo, hi
 
 
 @dataclass(frozen=True)
@@ -262,7 +247,10 @@ def constraint_expressions(
     """Friction polygons normalised by their radii, as CasADi rows (bounds: :func:`polygon_rows`).
 
     Rows: the front polygon over ``(F_xf, F_yf)`` (hard), then the rear polygon over
-    ``(F_xr, F_yr(x))`` (soft; see :func:`slack_penalties`). Without ``load_transfer`` the radii
+    ``(F_xr, F_yr(x))`` (soft; see :func:`slack_penalties`), then the front braking's bound
+    ``−F_xf ≤ cos(π/n) λ μ̂_brake F_zf`` (hard, ``≤ 0`` after the polygon's normalisation;
+    :func:`constraint_bounds`): the polygon's braking face at the friction where the front
+    brake torque lands (:func:`stage_parameters`). Without ``load_transfer`` the radii
     are the parameters (at the guess's axle loads) and the rows are the slabs
     ``n_j · f / R`` (``j < n/2``) within ``±cos(π/n)``; with it, each radius is ``λ μ̂ F_z`` at the
     loads of the stage's own ``F_xf + F_xr`` (linear in the forces, floored at 5 % of the weight
@@ -278,7 +266,9 @@ def constraint_expressions(
         front = [(nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front]
                  for nx, ny in half]
         rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] for nx, ny in half]
-        return ca.vertcat(*front, *rear)
+        brake = (-u[Input.fxf] / p[Param.radius_front] - ratio
+                 * p[Param.utilized_friction_front_brake] / p[Param.utilized_friction])
+        return ca.vertcat(*front, *rear, brake)
     floor = MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2
     fzf, fzr = normal_loads_n((u[Input.fxf] + u[Input.fxr]) / params.mass_kg, params)
     limit_front = ratio * p[Param.utilized_friction] * ca.fmax(fzf, floor)
@@ -289,7 +279,17 @@ def constraint_expressions(
     ]
     rear = [(nx * u[Input.fxr] + ny * fyr - limit_rear) / p[Param.radius_rear]
             for nx, ny in normals]
-    return ca.vertcat(*front, *rear)
+    brake = (-u[Input.fxf] - ratio * p[Param.utilized_friction_front_brake]
+             * ca.fmax(fzf, floor)) / p[Param.radius_front]
+    return ca.vertcat(*front, *rear, brake)
+
+
+def constraint_bounds(rows: PolygonRows) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper bounds of :func:`constraint_expressions`' rows: the polygons' (``rows``),
+    then the front braking's one-sided row."""
+    lower = np.append(np.full(rows.count, rows.lower), POLYGON_ROW_LOWER_BOUND)
+    upper = np.append(np.full(rows.count, rows.upper), 0.0)
+    return lower, upper
 
 
 @dataclass(frozen=True)

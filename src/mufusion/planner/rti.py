@@ -112,7 +112,8 @@ def iterate(
                 if cfg.reference_regain_limit and mode == "cruise" else None,
             )
         stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
-                                 cfg.utilization_factor, cfg.stiffness_table)
+                                 cfg.utilization_factor, cfg.stiffness_table,
+                                 par.torque_time_constant_s if cfg.axle_friction else None)
         d_lo, d_hi = lateral_corridor(
             guess_x, problem.obstacles, problem.lane_d_min_m, problem.lane_d_max_m, par,
             cfg.obstacle_margin_m, curvature_of_s(guess_x[1:, State.s]), cfg.dt_s,
