@@ -161,7 +161,7 @@ class PlannerConfig:
     # (pitch load transfer inside the OCP) instead of the guess's (beyond the paper).
     load_transfer: bool = True
     # Each axle's polygon at the lowest μ̂ under that axle over the torque lag's distance from
-    # the stage's start, instead of the centre of gravity's μ̂ (docs/decisions/0062).
+    # the stage's start, instead of the centre of gravity's μ̂ (docs/decisions/0063).
     axle_friction: bool = True
 
     def __post_init__(self) -> None:
