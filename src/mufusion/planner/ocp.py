@@ -56,9 +56,6 @@ class Param(IntEnum):
     # loads of the plan's own longitudinal forces; the radii above (at the guess's loads) then
     # only scale the rows.
     utilized_friction = 4
-    # λ μ̂ where the front brake torque commanded at the stage's start lands (the row bounding
-    # the front braking, :func:`constraint_expressions`).
-    utilized_friction_front_brake = 5
 
 
 N_PARAMS = len(Param)
@@ -67,9 +64,6 @@ N_PARAMS = len(Param)
 # :mod:`mufusion.planner.safeguards` for non-finite ones).
 MU_MIN = 0.05
 MU_MAX = 2.0
-
-INACTIVE_BRAKE_FRICTION = 2.0 * MU_MAX
-"""μ̂ of the front braking's row where it does not bind (above any polygon's)."""
 
 MIN_LOAD_SHARE = 0.05
 """Floor of an axle's normal load in the polygons, as a share of the weight."""
@@ -117,15 +111,17 @@ def stage_parameters(
     utilization_factor: float,
     stiffness_table: SurfaceTireTable | None = None,
     axle_lag_s: float | None = None,
+    polygon_sides: int = 12,
 ) -> StageParameters:
     """Per-stage parameters from the initial guess (predicted ``s_k`` and ``a_x,k``).
 
     ``stiffness_table``: ``None`` keeps the rear stiffness of the vehicle's tire; a table makes
     it follow each stage's μ̂ (``PlannerConfig.stiffness = "from_mu_hat"``).
     ``axle_lag_s``: ``None`` bounds the front braking by the polygon only (the centre of
-    gravity's μ̂ at ``s_k``); a torque lag [s] also bounds it by the lowest μ̂ under the front
-    axle from the stage's start to where a brake torque commanded then lands (``v_k`` times the
-    lag further, :func:`axle_friction`).
+    gravity's μ̂ at ``s_k``); a torque lag [s] also bounds it where the front axle meets a lower
+    μ̂ than the stage's between the stage's start and where a brake torque commanded then lands
+    (``v_k`` times the lag further, :func:`axle_friction`): at the polygon's braking face at that
+    μ̂ (:func:`front_brake_limit_n`; ``inf`` elsewhere).
 
     Returns a :class:`StageParameters`: arrays of length N and the stacked ``p``.
     """
@@ -149,13 +145,26 @@ def stage_parameters(
     p[:, Param.radius_rear] = radius_rear
     utilized = utilization_factor * mu
     p[:, Param.utilized_friction] = utilized
-    # Where the front brakes on the stage's μ̂ the row would duplicate the polygon's braking
-    # face (a degenerate QP: the authors' turn left its lane by 1.85 m instead of 0.27 m with
-    # it); it is loosened out of reach there.
-    p[:, Param.utilized_friction_front_brake] = utilization_factor * np.where(
-        mu_brake < mu, mu_brake, INACTIVE_BRAKE_FRICTION)
+    brake = np.full(s_k.shape, np.inf)
+    lower = mu_brake < mu
+    if np.any(lower):
+        brake[lower] = front_brake_limit_n(
+            polygon_directions(polygon_sides)[1] * utilization_factor * mu_brake[lower],
+            np.asarray(guess_inputs, dtype=float)[lower, Input.fxr], params)
     return StageParameters(mu, fzf, fzr, radius_front, radius_rear, utilized, c_r, kappa, p,
-                           mu_brake)
+                           mu_brake, brake)
+
+
+def front_brake_limit_n(
+    face_friction: np.ndarray, fxr_n: np.ndarray, params: VehicleParams
+) -> np.ndarray:
+    """The front braking [N] at a polygon's braking face ``k F_zf`` (``face_friction`` k:
+    ``cos(π/n) λ μ̂``) at the load that braking itself puts on the front axle, with the rear
+    force ``fxr_n``: ``F_b = k (F_zf,static − F_xr h / L) / (1 − k h / L)``."""
+    k = np.asarray(face_friction, dtype=float)
+    slope = params.cog_height_m / params.wheelbase_m
+    static = normal_loads_n(0.0, params)[0]
+    return k * (static - np.asarray(fxr_n, dtype=float) * slope) / (1.0 - k * slope)
 
 
 def _clipped_mu(mu: Any) -> np.ndarray:
@@ -247,10 +256,7 @@ def constraint_expressions(
     """Friction polygons normalised by their radii, as CasADi rows (bounds: :func:`polygon_rows`).
 
     Rows: the front polygon over ``(F_xf, F_yf)`` (hard), then the rear polygon over
-    ``(F_xr, F_yr(x))`` (soft; see :func:`slack_penalties`), then the front braking's bound
-    ``−F_xf ≤ cos(π/n) λ μ̂_brake F_zf`` (hard, ``≤ 0`` after the polygon's normalisation;
-    :func:`constraint_bounds`): the polygon's braking face at the friction where the front
-    brake torque lands (:func:`stage_parameters`). Without ``load_transfer`` the radii
+    ``(F_xr, F_yr(x))`` (soft; see :func:`slack_penalties`). Without ``load_transfer`` the radii
     are the parameters (at the guess's axle loads) and the rows are the slabs
     ``n_j · f / R`` (``j < n/2``) within ``±cos(π/n)``; with it, each radius is ``λ μ̂ F_z`` at the
     loads of the stage's own ``F_xf + F_xr`` (linear in the forces, floored at 5 % of the weight
@@ -266,9 +272,7 @@ def constraint_expressions(
         front = [(nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front]
                  for nx, ny in half]
         rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] for nx, ny in half]
-        brake = (-u[Input.fxf] / p[Param.radius_front] - ratio
-                 * p[Param.utilized_friction_front_brake] / p[Param.utilized_friction])
-        return ca.vertcat(*front, *rear, brake)
+        return ca.vertcat(*front, *rear)
     floor = MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2
     fzf, fzr = normal_loads_n((u[Input.fxf] + u[Input.fxr]) / params.mass_kg, params)
     limit_front = ratio * p[Param.utilized_friction] * ca.fmax(fzf, floor)
@@ -279,17 +283,7 @@ def constraint_expressions(
     ]
     rear = [(nx * u[Input.fxr] + ny * fyr - limit_rear) / p[Param.radius_rear]
             for nx, ny in normals]
-    brake = (-u[Input.fxf] - ratio * p[Param.utilized_friction_front_brake]
-             * ca.fmax(fzf, floor)) / p[Param.radius_front]
-    return ca.vertcat(*front, *rear, brake)
-
-
-def constraint_bounds(rows: PolygonRows) -> tuple[np.ndarray, np.ndarray]:
-    """Lower and upper bounds of :func:`constraint_expressions`' rows: the polygons' (``rows``),
-    then the front braking's one-sided row."""
-    lower = np.append(np.full(rows.count, rows.lower), POLYGON_ROW_LOWER_BOUND)
-    upper = np.append(np.full(rows.count, rows.upper), 0.0)
-    return lower, upper
+    return ca.vertcat(*front, *rear)
 
 
 @dataclass(frozen=True)

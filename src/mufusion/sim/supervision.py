@@ -69,7 +69,7 @@ evasion the posterior allows passes the obstacle, and the vehicle brakes in lane
 unrelaxed μ̂ (the planner's emergency mode) to lower the impact speed, logged as
 ``futile_evasion``. The check is made afresh at each planning step. An evasion inside the band it
 may use (the road) that is predicted to hit is reviewed the same way; without a posterior (GT, L,
-P) the check re-plans the evasion with μ̂ itself (docs/decisions/0063).
+P) the check re-plans the evasion with μ̂ itself (docs/decisions/0062).
 
 The loop runs them as its supervisors (:class:`~mufusion.sim.supervisor.Supervisor`):
 :class:`~mufusion.sim.stop_in_lane.StopInLane`, :class:`~mufusion.sim.lane_recovery.LaneRecovery`
