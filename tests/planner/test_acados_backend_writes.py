@@ -20,9 +20,15 @@ from mufusion.vehicle.planner_model import N_INPUTS, N_STATES
 CONFIG = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=3.95)
 
 
-def _solve_through_the_wrapper(self, x0, guess_x, guess_u, p, yref, weights, lbx, ubx, ubu):
-    """The reference: every stage and field through the Cython wrapper's public set calls."""
+def _solve_through_the_wrapper(self, x0, guess_x, guess_u, p, yref, weights, lbx, ubx, ubu,
+                               lbu):
+    """The reference: every stage and field through the Cython wrapper's public set calls
+    (the lower input bounds, as the one-call writer, only when they differ from the generated
+    ones or did at the last solve)."""
     s, n = self.solver, self.n
+    changed = not np.array_equal(lbu, self._generated_lbu)
+    write_lbu = changed or self._lbu_changed
+    self._lbu_changed = changed
     if self.augmented:
         x0, guess_x, guess_u = augmented_problem(
             x0, guess_x, guess_u, p, self.polygon_sides, self.dt_s)
@@ -36,6 +42,8 @@ def _solve_through_the_wrapper(self, x0, guess_x, guess_u, p, yref, weights, lbx
         s.cost_set(k, "yref", yref[k])
         s.cost_set(k, "W", w_stage)
         s.constraints_set(k, "ubu", ubu)
+        if write_lbu:
+            s.constraints_set(k, "lbu", lbu[k])
         if k > 0:
             s.constraints_set(k, "lbx", lbx[k - 1])
             s.constraints_set(k, "ubx", ubx[k - 1])

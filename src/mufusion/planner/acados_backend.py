@@ -55,7 +55,8 @@ _FORMAT_VERSION = "7"
 # where the Cython wrapper's set/get take one call per stage and field (≈ 300 per solve).
 # ``data[0]`` is the mode:
 #   1  write ``[1, x_0 (stage 0's bounds), p_0 … p_N, yref_0 … yref_N, W_0 … W_N (column-major),
-#      ubu_0 … ubu_{N-1}, lbx_1 … lbx_N, ubx_1 … ubx_N, x_0 … x_N, u_0 … u_{N-1}]``;
+#      ubu_0 … ubu_{N-1}, set_lbu, lbu_0 … lbu_{N-1}, lbx_1 … lbx_N, ubx_1 … ubx_N, x_0 … x_N,
+#      u_0 … u_{N-1}]``; the lower input bounds are set only if ``set_lbu`` is not 0;
 #   2  read ``[2, x_0 … x_N, u_0 … u_{N-1}]`` (the solution, into the caller's array).
 # Each stage's sizes come from the solver's own dimensions. If the buffer's length differs from
 # the layout's, nothing is written or read; either way ``data[0]`` returns the layout's length,
@@ -95,6 +96,8 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "hpipm_mode": hpipm_mode,
             "steering_rate_limit": config.steering_rate_limit,
             "load_transfer": config.load_transfer,
+            # The parameter vector's layout (planner/ocp.py's Param).
+            "n_params": N_PARAMS,
             "utilization": config.utilization_factor,
             # The slack penalties are written into the generated problem (ocp.cost.zl …).
             "slack_penalties": [config.weights.slack_l1, config.weights.slack_l2],
@@ -137,6 +140,8 @@ class _GeneratedSolver:
         self.augmented = config.steering_rate_limit
         self.polygon_sides, self.dt_s = config.polygon_sides, config.dt_s
         self.solver = module.AcadosOcpSolverCython(name, "SQP_RTI", n)
+        self._generated_lbu = np.tile(_input_bounds(params, config)[0], (n, 1))
+        self._lbu_changed = False
 
     def solve(
         self,
@@ -149,12 +154,18 @@ class _GeneratedSolver:
         lbx: np.ndarray,
         ubx: np.ndarray,
         ubu: np.ndarray,
+        lbu: np.ndarray,
     ) -> tuple[int, np.ndarray, np.ndarray]:
         """Write the problem and the guess in one call, run one RTI step, read the plan.
 
         Takes and returns the planner's states ``(N+1, 6)`` and forces ``(N, 3)``; with the
         steering's rate limit the OCP's front-force state is formed and dropped here."""
         n = self.n
+        # The lower bounds as generated need no write; after a solve that changed them, one
+        # more restores them.
+        changed = not np.array_equal(lbu, self._generated_lbu)
+        write_lbu = changed or self._lbu_changed
+        self._lbu_changed = changed
         if self.augmented:
             x0, guess_x, guess_u = augmented_problem(
                 x0, guess_x, guess_u, p, self.polygon_sides, self.dt_s)
@@ -165,7 +176,7 @@ class _GeneratedSolver:
             _WRITE, x0, p[:n], p[n - 1], yref[:n], yref[n, :N_STATES],
             np.broadcast_to(w_stage.ravel(order="F"), (n, w_stage.size)),
             w_stage[:N_STATES, :N_STATES].ravel(order="F"),
-            np.broadcast_to(ubu, (n, ubu.size)),
+            np.broadcast_to(ubu, (n, ubu.size)), [float(write_lbu)], lbu,
             lbx[:-1], lbx[-1, :1], ubx[:-1], ubx[-1, :1],
         )
         data = np.concatenate([np.ravel(part) for part in (*problem, guess_x, guess_u)])
@@ -211,8 +222,8 @@ class AcadosBackend:
     ) -> None:
         at = load_acados_template()
         self.params, self.config = params, config
-        # The lower input bounds never change and stay as generated; the drive bound varies.
-        self._ubu = _input_bounds(params, config)[1]
+        # The drive bound varies with the mode, the front braking's with the stages' friction.
+        self._lbu, self._ubu = _input_bounds(params, config)
         self._fast = _GeneratedSolver(at, params, config, FAST_HPIPM_MODE)
         self._robust = (
             _GeneratedSolver(at, params, config, ROBUST_HPIPM_MODE) if robust_retry else None
@@ -236,20 +247,26 @@ class AcadosBackend:
         d_hi: np.ndarray,
         min_speed_mps: float,
         max_drive_force_n: float | None = None,
+        max_front_brake_force_n: np.ndarray | None = None,
     ) -> tuple[int, np.ndarray, np.ndarray]:
         """One RTI step; returns ``(status, states (N+1, 6), inputs (N, 3))``.
 
         ``max_drive_force_n`` lowers the rear drive-force bound for this solve (``None``: the
-        actuator's bound)."""
+        actuator's bound); ``max_front_brake_force_n`` ``(N,)`` [N, ≥ 0, ``inf``: none] raises
+        the front braking's bound per stage."""
         n = self.config.horizon_steps
         ubu = self._ubu.copy()
         if max_drive_force_n is not None:
             ubu[-1] = min(ubu[-1], max_drive_force_n)
+        lbu = np.tile(self._lbu, (n, 1))
+        if max_front_brake_force_n is not None:
+            # F_xf is the second-last bounded input (F_xr last, see _input_bounds).
+            lbu[:, -2] = np.maximum(lbu[:, -2], -np.asarray(max_front_brake_force_n, float))
         lbx = np.empty((n, 2))
         lbx[:, 0], lbx[:, 1] = d_lo, min_speed_mps
         ubx = np.empty((n, 2))
         ubx[:, 0], ubx[:, 1] = d_hi, MAX_SPEED_MPS
-        args = (x0, guess_x, guess_u, p, yref, weights, lbx, ubx, ubu)
+        args = (x0, guess_x, guess_u, p, yref, weights, lbx, ubx, ubu, lbu)
         self.last_solve_retried = False
         status, xs, us = self._fast.solve(*args)
         if status in (0, 2) or self._robust is None:

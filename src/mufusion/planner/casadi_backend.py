@@ -149,12 +149,16 @@ class CasadiBackend:
         self._n_slack = 2 * n + 2 * rows.per_axle * n
 
     def solve(self, x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi, min_speed_mps,
-              max_drive_force_n=None):
+              max_drive_force_n=None, max_front_brake_force_n=None):
         """Solve to convergence; returns ``(status, states (N+1, 6), inputs (N, 3))``."""
         n = self.config.horizon_steps
         ubu = self._ubu.copy()
         if max_drive_force_n is not None:
             ubu[:, 2] = np.minimum(ubu[:, 2], max_drive_force_n)
+        lbu = self._lbu.copy()
+        if max_front_brake_force_n is not None:
+            brake = np.asarray(max_front_brake_force_n, dtype=float)
+            lbu[:, Input.fxf] = np.maximum(lbu[:, Input.fxf], -brake)
         if self._augmented:
             x0, guess_x, guess_u = augmented_problem(
                 x0, guess_x, guess_u, p, self.config.polygon_sides, self.config.dt_s)
@@ -163,7 +167,7 @@ class CasadiBackend:
         # vx bounds at stages 1..N-1 are hard, as in the acados description.
         lbx_x[1:n, State.vx] = min_speed_mps
         ubx_x[1:n, State.vx] = MAX_SPEED_MPS
-        lbz = np.concatenate([lbx_x.ravel(), self._lbu.ravel(), np.zeros(self._n_slack)])
+        lbz = np.concatenate([lbx_x.ravel(), lbu.ravel(), np.zeros(self._n_slack)])
         ubz = np.concatenate([ubx_x.ravel(), ubu.ravel(), np.full(self._n_slack, np.inf)])
         z0 = np.concatenate([guess_x.ravel(), guess_u.ravel(), np.zeros(self._n_slack)])
         par = np.concatenate([p.ravel(), yref.ravel(), weights, x0, d_lo, d_hi])

@@ -160,6 +160,9 @@ class PlannerConfig:
     # The friction polygons' radii follow the axle loads of the plan's own longitudinal forces
     # (pitch load transfer inside the OCP) instead of the guess's (beyond the paper).
     load_transfer: bool = True
+    # Each stage's front braking also bounded by the lowest μ̂ under the front axle from the
+    # stage's start to one torque lag later, where it is below the stage's (docs/decisions/0063).
+    axle_friction: bool = True
 
     def __post_init__(self) -> None:
         if self.stiffness not in STIFFNESS_MODELS:

@@ -11,7 +11,6 @@ configures the problem is apart, in :mod:`mufusion.planner.config`.
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Any
@@ -24,7 +23,8 @@ from mufusion.planner.config import PlannerConfig as PlannerConfig
 from mufusion.planner.config import PlannerMode as PlannerMode
 from mufusion.planner.config import PlannerObstacle as PlannerObstacle
 from mufusion.planner.config import PlausibilityLimits as PlausibilityLimits
-from mufusion.planner.passing import passing_left
+from mufusion.planner.corridor import MAX_SWING_HEADING_RAD as MAX_SWING_HEADING_RAD
+from mufusion.planner.corridor import lateral_corridor as lateral_corridor
 from mufusion.planner.plan import StageParameters
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
@@ -110,18 +110,28 @@ def stage_parameters(
     params: VehicleParams,
     utilization_factor: float,
     stiffness_table: SurfaceTireTable | None = None,
+    axle_lag_s: float | None = None,
+    polygon_sides: int = 12,
 ) -> StageParameters:
     """Per-stage parameters from the initial guess (predicted ``s_k`` and ``a_x,k``).
 
     ``stiffness_table``: ``None`` keeps the rear stiffness of the vehicle's tire; a table makes
     it follow each stage's μ̂ (``PlannerConfig.stiffness = "from_mu_hat"``).
+    ``axle_lag_s``: ``None`` bounds the front braking by the polygon only (the centre of
+    gravity's μ̂ at ``s_k``); a torque lag [s] also bounds it where the front axle meets a lower
+    μ̂ than the stage's between the stage's start and where a brake torque commanded then lands
+    (``v_k`` times the lag further, :func:`axle_friction`): at the polygon's braking face at that
+    μ̂ (:func:`front_brake_limit_n`; ``inf`` elsewhere).
 
     Returns a :class:`StageParameters`: arrays of length N and the stacked ``p``.
     """
     s_k = guess_states[:-1, State.s]
     fzf, fzr = axle_loads_n(guess_inputs, params)
-    # np.minimum(np.maximum(...)): np.clip's values (non-zero bounds) at less overhead.
-    mu = np.minimum(np.maximum(np.asarray(mu_hat_of_s(s_k), dtype=float), MU_MIN), MU_MAX)
+    mu = mu_brake = _clipped_mu(mu_hat_of_s(s_k))
+    if axle_lag_s is not None:
+        reach = np.maximum(guess_states[:-1, State.vx], 0.0) * axle_lag_s
+        mu_brake = np.minimum(
+            mu, axle_friction(mu_hat_of_s, s_k + params.cog_to_front_axle_m, reach))
     kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
     c_r = rear_cornering_stiffness_n_per_rad(
         params, fzr, utilization_factor, mu_hat=mu, table=stiffness_table
@@ -135,7 +145,53 @@ def stage_parameters(
     p[:, Param.radius_rear] = radius_rear
     utilized = utilization_factor * mu
     p[:, Param.utilized_friction] = utilized
-    return StageParameters(mu, fzf, fzr, radius_front, radius_rear, utilized, c_r, kappa, p)
+    brake = np.full(s_k.shape, np.inf)
+    lower = mu_brake < mu
+    if np.any(lower):
+        brake[lower] = front_brake_limit_n(
+            polygon_directions(polygon_sides)[1] * utilization_factor * mu_brake[lower],
+            np.asarray(guess_inputs, dtype=float)[lower, Input.fxr], params)
+    return StageParameters(mu, fzf, fzr, radius_front, radius_rear, utilized, c_r, kappa, p,
+                           mu_brake, brake)
+
+
+def front_brake_limit_n(
+    face_friction: np.ndarray, fxr_n: np.ndarray, params: VehicleParams
+) -> np.ndarray:
+    """The front braking [N] at a polygon's braking face ``k F_zf`` (``face_friction`` k:
+    ``cos(π/n) λ μ̂``) at the load that braking itself puts on the front axle, with the rear
+    force ``fxr_n``: ``F_b = k (F_zf,static − F_xr h / L) / (1 − k h / L)``."""
+    k = np.asarray(face_friction, dtype=float)
+    slope = params.cog_height_m / params.wheelbase_m
+    static = normal_loads_n(0.0, params)[0]
+    return k * (static - np.asarray(fxr_n, dtype=float) * slope) / (1.0 - k * slope)
+
+
+def _clipped_mu(mu: Any) -> np.ndarray:
+    """μ̂ clipped to [:data:`MU_MIN`, :data:`MU_MAX`]."""
+    # np.minimum(np.maximum(...)): np.clip's values (non-zero bounds) at less overhead.
+    return np.minimum(np.maximum(np.asarray(mu, dtype=float), MU_MIN), MU_MAX)
+
+
+def axle_friction(mu_hat_of_s, axle_s_m: np.ndarray, reach_m: np.ndarray) -> np.ndarray:
+    """The lowest μ̂ an axle meets from ``axle_s_m`` to ``reach_m`` further (at both ends and
+    the middle), clipped like the stages' μ̂.
+
+    Where the friction drops, a stage's forces act on the axles, not at the centre of gravity,
+    and the wheel torques follow their command with a lag: braking planned at the CoG's μ̂ with
+    the front axle just short of a drop lands on the low friction (docs/decisions/0063).
+
+    Examples
+    --------
+    >>> mu = lambda s: np.where(np.asarray(s) < 10.0, 0.9, 0.3)
+    >>> axle_friction(mu, np.array([8.0, 9.5]), np.array([1.0, 1.0])).tolist()
+    [0.9, 0.3]
+    """
+    s = np.asarray(axle_s_m, dtype=float)
+    reach = np.asarray(reach_m, dtype=float)
+    lowest = np.minimum(np.minimum(mu_hat_of_s(s), mu_hat_of_s(s + 0.5 * reach)),
+                        mu_hat_of_s(s + reach))
+    return _clipped_mu(lowest)
 
 
 def plan_polygon_radii_n(
@@ -150,68 +206,6 @@ def plan_polygon_radii_n(
         return stage.radius_front_n, stage.radius_rear_n
     fzf, fzr = axle_loads_n(inputs, params)
     return stage.utilized_friction * fzf, stage.utilized_friction * fzr
-
-
-MAX_SWING_HEADING_RAD = 0.1
-"""Largest heading error whose corner swing :func:`lateral_corridor` takes off the lane bounds."""
-
-
-def lateral_corridor(
-    guess_states: np.ndarray,
-    obstacles: Sequence[PlannerObstacle],
-    lane_d_min_m: float,
-    lane_d_max_m: float,
-    params: VehicleParams,
-    margin_m: float,
-    curvature_1pm: np.ndarray | None = None,
-    dt_s: float = 0.0,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds on the reference point's ``d`` per stage 1..N, shape ``(N,)`` each.
-
-    ``lane_d_min_m``/``lane_d_max_m`` bound the reference point itself (the caller has already
-    shrunk the lane or road edges by half the vehicle width, TAMP framework). On a curve of
-    curvature κ (``curvature_1pm`` at the stages' predicted positions) the body's ends, aligned
-    with the lane at its middle, stick out of the curve by ``|κ| (l/2)² / 2``; that much is taken
-    off the outer bound (right of a left curve, left of a right curve). A heading error Δψ (the
-    guess's, as RTI linearises there) swings the front corners by ``a_f sin Δψ`` and the rear ones
-    by ``a_r sin Δψ`` the other way (``a_f``, ``a_r``: CoG to the body's front and rear); the
-    bounds shrink by that too. An obstacle
-    overlapping the vehicle's footprint at the guess's predicted ``s_k`` closes the side opposite
-    to the guess's ``d_k`` (pass left if the guess is left of the obstacle's centre), which keeps
-    the problem convex, unless only the other side has room (:func:`~.passing.passing_left`).
-    A moving obstacle is where it is predicted at each stage's time ``k · dt_s``
-    (:meth:`PlannerObstacle.s_at_stages`).
-    """
-    s_k = guess_states[1:, State.s]
-    d_k = guess_states[1:, State.d]
-    half_w = 0.5 * params.width_m
-    lo = np.full(s_k.shape, float(lane_d_min_m))
-    hi = np.full(s_k.shape, float(lane_d_max_m))
-    half_len = 0.5 * params.length_m
-    if curvature_1pm is not None:
-        kappa = np.asarray(curvature_1pm, dtype=float) * np.ones_like(s_k)
-        bulge = 0.5 * np.abs(kappa) * half_len**2
-        hi = np.where(kappa < 0.0, hi - bulge, hi)
-        lo = np.where(kappa > 0.0, lo + bulge, lo)
-    a_front, a_rear = params.cog_to_body_front_m, params.cog_to_body_rear_m
-    # Only lane-keeping headings count in full: in an evasive manoeuvre the heading reaches
-    # 0.3-0.5 rad and the full swing (> 1 m each side) would close the corridor the manoeuvre
-    # needs; the obstacle margin covers the corners there.
-    sin_dpsi = np.sin(np.minimum(np.maximum(guess_states[1:, State.dpsi],
-                                            -MAX_SWING_HEADING_RAD), MAX_SWING_HEADING_RAD))
-    hi = hi - a_front * np.maximum(sin_dpsi, 0.0) - a_rear * np.maximum(-sin_dpsi, 0.0)
-    lo = lo + a_front * np.maximum(-sin_dpsi, 0.0) + a_rear * np.maximum(sin_dpsi, 0.0)
-    # A corridor too tight for the vehicle leaves its midpoint rather than an empty interval.
-    mid = 0.5 * (lo + hi)
-    lo, hi = np.minimum(lo, mid), np.maximum(hi, mid)
-    for ob in obstacles:
-        s_ob = ob.s_at_stages(s_k.shape, dt_s)
-        overlap = np.abs(s_k - s_ob) < half_len + 0.5 * ob.length_m + margin_m
-        clear = 0.5 * ob.width_m + half_w + margin_m
-        left = passing_left(d_k, ob.d_m, clear, lo, hi)
-        lo = np.where(overlap & left, np.maximum(lo, ob.d_m + clear), lo)
-        hi = np.where(overlap & ~left, np.minimum(hi, ob.d_m - clear), hi)
-    return lo, hi
 
 
 @dataclass(frozen=True)

@@ -72,3 +72,8 @@ class StageParameters:
     rear_stiffness_n_per_rad: np.ndarray
     curvature_1pm: np.ndarray
     p: np.ndarray
+    # μ̂ where the front brake torque commanded at the stage's start lands (the front braking's
+    # bound; the CoG's ``mu_hat`` without ``PlannerConfig.axle_friction``).
+    mu_hat_front_brake: np.ndarray
+    # The front braking's bound per stage [N] at that μ̂ (``inf`` where it is the stage's own).
+    front_brake_limit_n: np.ndarray

@@ -112,7 +112,9 @@ def iterate(
                 if cfg.reference_regain_limit and mode == "cruise" else None,
             )
         stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
-                                 cfg.utilization_factor, cfg.stiffness_table)
+                                 cfg.utilization_factor, cfg.stiffness_table,
+                                 par.torque_time_constant_s if cfg.axle_friction else None,
+                                 cfg.polygon_sides)
         d_lo, d_hi = lateral_corridor(
             guess_x, problem.obstacles, problem.lane_d_min_m, problem.lane_d_max_m, par,
             cfg.obstacle_margin_m, curvature_of_s(guess_x[1:, State.s]), cfg.dt_s,
@@ -131,6 +133,7 @@ def iterate(
                 # vehicle's acceleration, not at the friction limit: regaining speed at the
                 # limit after an evasion leaves the driven axle no lateral reserve.
                 par.mass_kg * cfg.max_cruise_accel_mps2 if mode == "cruise" else 0.0,
+                stage.front_brake_limit_n,
             )
             retried = retried or backend.last_solve_retried
             if status not in (0, 2):

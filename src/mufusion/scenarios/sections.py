@@ -155,6 +155,11 @@ class PlannerSettings(_Strict):
     """The friction polygons' radii follow the axle loads of each stage's own planned
     longitudinal forces (pitch load transfer inside the OCP); ``false``: the loads of the
     initial guess, as in the paper's planner."""
+    axle_friction: bool = PlannerConfig.axle_friction
+    """Bound each stage's front braking by the lowest μ̂ the front axle meets from the stage's
+    start to where a brake torque commanded then lands, one torque lag later, where that is
+    below the stage's (centre of gravity's) μ̂ (docs/decisions/0063); ``false``: the front
+    polygon at the stage's μ̂ alone, as in the paper's planner."""
     brake_first: bool = True
     """Stop in front of an obstacle in the path whenever the friction the planner may use
     allows it (or no side has room), and evade only otherwise; ``false``: evade whenever an

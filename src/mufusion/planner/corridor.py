@@ -1,0 +1,75 @@
+"""The lateral corridor of the OCP: bounds on the reference point's ``d`` per stage from the
+lane, the curve's bulge, the heading's corner swing and the obstacles (planner/ocp.py re-exports
+it)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from mufusion.planner.config import PlannerObstacle
+from mufusion.planner.passing import passing_left
+from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.planner_model import State
+
+MAX_SWING_HEADING_RAD = 0.1
+"""Largest heading error whose corner swing :func:`lateral_corridor` takes off the lane bounds."""
+
+
+def lateral_corridor(
+    guess_states: np.ndarray,
+    obstacles: Sequence[PlannerObstacle],
+    lane_d_min_m: float,
+    lane_d_max_m: float,
+    params: VehicleParams,
+    margin_m: float,
+    curvature_1pm: np.ndarray | None = None,
+    dt_s: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on the reference point's ``d`` per stage 1..N, shape ``(N,)`` each.
+
+    ``lane_d_min_m``/``lane_d_max_m`` bound the reference point itself (the caller has already
+    shrunk the lane or road edges by half the vehicle width, TAMP framework). On a curve of
+    curvature κ (``curvature_1pm`` at the stages' predicted positions) the body's ends, aligned
+    with the lane at its middle, stick out of the curve by ``|κ| (l/2)² / 2``; that much is taken
+    off the outer bound (right of a left curve, left of a right curve). A heading error Δψ (the
+    guess's, as RTI linearises there) swings the front corners by ``a_f sin Δψ`` and the rear ones
+    by ``a_r sin Δψ`` the other way (``a_f``, ``a_r``: CoG to the body's front and rear); the
+    bounds shrink by that too. An obstacle
+    overlapping the vehicle's footprint at the guess's predicted ``s_k`` closes the side opposite
+    to the guess's ``d_k`` (pass left if the guess is left of the obstacle's centre), which keeps
+    the problem convex, unless only the other side has room (:func:`~.passing.passing_left`).
+    A moving obstacle is where it is predicted at each stage's time ``k · dt_s``
+    (:meth:`PlannerObstacle.s_at_stages`).
+    """
+    s_k = guess_states[1:, State.s]
+    d_k = guess_states[1:, State.d]
+    half_w = 0.5 * params.width_m
+    lo = np.full(s_k.shape, float(lane_d_min_m))
+    hi = np.full(s_k.shape, float(lane_d_max_m))
+    half_len = 0.5 * params.length_m
+    if curvature_1pm is not None:
+        kappa = np.asarray(curvature_1pm, dtype=float) * np.ones_like(s_k)
+        bulge = 0.5 * np.abs(kappa) * half_len**2
+        hi = np.where(kappa < 0.0, hi - bulge, hi)
+        lo = np.where(kappa > 0.0, lo + bulge, lo)
+    a_front, a_rear = params.cog_to_body_front_m, params.cog_to_body_rear_m
+    # Only lane-keeping headings count in full: in an evasive manoeuvre the heading reaches
+    # 0.3-0.5 rad and the full swing (> 1 m each side) would close the corridor the manoeuvre
+    # needs; the obstacle margin covers the corners there.
+    sin_dpsi = np.sin(np.minimum(np.maximum(guess_states[1:, State.dpsi],
+                                            -MAX_SWING_HEADING_RAD), MAX_SWING_HEADING_RAD))
+    hi = hi - a_front * np.maximum(sin_dpsi, 0.0) - a_rear * np.maximum(-sin_dpsi, 0.0)
+    lo = lo + a_front * np.maximum(-sin_dpsi, 0.0) + a_rear * np.maximum(sin_dpsi, 0.0)
+    # A corridor too tight for the vehicle leaves its midpoint rather than an empty interval.
+    mid = 0.5 * (lo + hi)
+    lo, hi = np.minimum(lo, mid), np.maximum(hi, mid)
+    for ob in obstacles:
+        s_ob = ob.s_at_stages(s_k.shape, dt_s)
+        overlap = np.abs(s_k - s_ob) < half_len + 0.5 * ob.length_m + margin_m
+        clear = 0.5 * ob.width_m + half_w + margin_m
+        left = passing_left(d_k, ob.d_m, clear, lo, hi)
+        lo = np.where(overlap & left, np.maximum(lo, ob.d_m + clear), lo)
+        hi = np.where(overlap & ~left, np.minimum(hi, ob.d_m - clear), hi)
+    return lo, hi
