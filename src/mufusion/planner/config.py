@@ -161,7 +161,7 @@ class PlannerConfig:
     # (pitch load transfer inside the OCP) instead of the guess's (beyond the paper).
     load_transfer: bool = True
     # Each stage's front braking also bounded by the lowest μ̂ under the front axle from the
-    # stage's start to one torque lag later, where it is below the stage's (docs/decisions/0063).
+    # stage's start to one torque lag later, where it is below the stage's (docs/decisions/0064).
     axle_friction: bool = True
 
     def __post_init__(self) -> None:

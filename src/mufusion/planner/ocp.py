@@ -179,7 +179,7 @@ def axle_friction(mu_hat_of_s, axle_s_m: np.ndarray, reach_m: np.ndarray) -> np.
 
     Where the friction drops, a stage's forces act on the axles, not at the centre of gravity,
     and the wheel torques follow their command with a lag: braking planned at the CoG's μ̂ with
-    the front axle just short of a drop lands on the low friction (docs/decisions/0063).
+    the front axle just short of a drop lands on the low friction (docs/decisions/0064).
 
     Examples
     --------

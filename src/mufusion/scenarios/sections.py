@@ -158,7 +158,7 @@ class PlannerSettings(_Strict):
     axle_friction: bool = PlannerConfig.axle_friction
     """Bound each stage's front braking by the lowest μ̂ the front axle meets from the stage's
     start to where a brake torque commanded then lands, one torque lag later, where that is
-    below the stage's (centre of gravity's) μ̂ (docs/decisions/0063); ``false``: the front
+    below the stage's (centre of gravity's) μ̂ (docs/decisions/0064); ``false``: the front
     polygon at the stage's μ̂ alone, as in the paper's planner."""
     brake_first: bool = True
     """Stop in front of an obstacle in the path whenever the friction the planner may use
