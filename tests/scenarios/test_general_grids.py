@@ -141,12 +141,9 @@ def test_gt_in_feasible_general_turns_locks_no_wheel_and_keeps_its_lane_on_rises
             f"GT left its lane by {m.max_lane_excursion_m:.2f} m on a rise: {', '.join(drawn)}")
 
 
-# Issue 38's acceptance, not met yet: with docs/decisions/0052-0056 GT still leaves its lane in
-# 10 of the grid's 142 feasible variants (docs/feasibility.md, "The general grids"), all trucks,
-# none spinning: the drop 10 m into the arc of a 15 m curve (0.14-0.50 m) and four rises on
-# 40 m at 19 m/s (0.33-0.39 m). Some of them are among these draws. Strict: once every draw
-# keeps its lane, this fails until the marker goes.
-@pytest.mark.xfail(strict=True, reason="issue 38: GT leaves its lane in feasible drops")
+# Issue 38's acceptance over seeded draws. Decision 0064 (the front braking bounded where its
+# torque lands) took the drops into 15 m arcs back into the lane; the four rises of mechanism B
+# below are still out in the full grid (docs/feasibility.md, "The general grids").
 @pytest.mark.slow
 @seed(38)
 @_CLOSED_LOOP
@@ -158,6 +155,22 @@ def test_gt_keeps_its_lane_in_feasible_general_turns(drawn) -> None:
     assert not m.left_lane, (
         f"GT left its lane by {m.max_lane_excursion_m:.2f} m in a feasible variant "
         f"(margin {verdict.margin_mps:+.2f} m/s): {', '.join(drawn)}")
+
+
+# Mechanism B (decision 0061): the truck at 19 m/s onto a 40 m arc after a rise 0.3 → 0.9; its
+# plans exceed |ψ̇| ≤ μ̂ g / v and the body slip reaches 0.18-0.20 rad, 0.33-0.39 m out. Strict:
+# this fails once a fix keeps the lane, until the marker goes.
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="issue 38 mechanism B: no stability envelope yet")
+@pytest.mark.slow
+def test_gt_keeps_its_lane_on_the_rise_onto_a_40_m_arc_at_19_mps() -> None:
+    drawn = (*_campaign(TURN_GRID).overrides, "vehicle=truck", "turn.radius_m=40.0",
+             "turn.angle_rad=1.5708", "initial_speed_mps=19.0", "duration_s=10.0",
+             "friction.change_ahead_m=10.0", "friction.mu_before=0.3", "friction.mu_turn=0.9",
+             "turn.direction=left")
+    verdict, m = _gt_turn(drawn)
+    assert verdict.feasibility_class is FeasibilityClass.FEASIBLE
+    assert not m.left_lane, f"GT left its lane by {m.max_lane_excursion_m:.2f} m"
 
 
 @pytest.mark.slow
