@@ -391,7 +391,10 @@ def test_an_evasion_that_no_plausible_friction_makes_pass_turns_into_braking_in_
     b, s = compute_metrics(braking), compute_metrics(swerving)
     assert b.collision and s.collision  # no plan avoids it: physics
     assert b.impact_speed_mps < s.impact_speed_mps - 1.0
-    assert b.max_lane_excursion_m == 0.0 < s.max_lane_excursion_m
+    # In lane before decision 0064; since the front braking is bounded by F-safe's camera bound
+    # where its torque lands (0.553 beyond the local estimate's ≈ 4 m), the lane-recovery steps
+    # between the braking ones drift 0.34 m over the left edge (swerving: 0.87 m).
+    assert b.max_lane_excursion_m < 0.5 * s.max_lane_excursion_m
     futile = _events(braking, EventKind.FUTILE_EVASION)
     assert len(futile) >= 1 and float(futile["t_s"].min()) == 0.0
     # At each such step the vehicle brakes in lane instead of the candidate evasion.
