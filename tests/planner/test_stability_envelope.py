@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pytest
 
 from mufusion.planner.ocp import MAX_SPEED_MPS, Param, PlannerConfig
 from mufusion.planner.stability import (
@@ -90,3 +91,9 @@ def test_a_solver_with_the_envelope_keeps_the_plans_yaw_rate_inside() -> None:
     free, enveloped = bounded
     assert free > 1.3 * bound
     assert enveloped < 1.05 * bound
+
+
+def test_a_curve_fraction_outside_0_1_is_refused_by_name() -> None:
+    for bad in (0.0, 1.2):
+        with pytest.raises(ValueError, match="reference_curve_fraction"):
+            dataclasses.replace(CONFIG, reference_curve_fraction=bad)
