@@ -370,11 +370,10 @@ def _describe(
     ocp.constraints.uh = np.full(rows.count, rows.upper)
     # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
     # follows the state, which at stage 0 is fixed, so the rear polygon is soft. acados
-    # orders a stage's slacks as the soft bounds (d) first, then the soft h rows, which is
-    # the layout of SlackPenalties.
+    # orders a stage's slacks as the soft bounds (d, the envelope's priced as d's) first, then
+    # the soft h rows: the layout of SlackPenalties, the envelope's inserted after d's.
     ocp.constraints.idxsh = np.arange(rows.per_axle, rows.count)
     penalties = slack_penalties(config.weights, rows.per_axle)
-    # The envelope's slacks (after the corridor's: soft bounds come first) priced as it.
     l1, l2 = penalties.linear_stage, penalties.quadratic_stage
     ocp.cost.zl = ocp.cost.zu = np.insert(l1, 1, [l1[0]] * envelope)
     ocp.cost.Zl = ocp.cost.Zu = np.insert(l2, 1, [l2[0]] * envelope)
