@@ -173,6 +173,19 @@ def test_gt_keeps_its_lane_on_the_rise_onto_a_40_m_arc_at_19_mps() -> None:
     assert not m.left_lane, f"GT left its lane by {m.max_lane_excursion_m:.2f} m"
 
 
+# Decision 0065: the same run with the speed reference's curve speeds at 0.9 of the polygon's
+# lateral reach (not the default: measured on the grids first) keeps the lane.
+@pytest.mark.slow
+def test_gt_keeps_its_lane_on_that_rise_with_a_curve_speed_reserve() -> None:
+    drawn = (*_campaign(TURN_GRID).overrides, "vehicle=truck", "turn.radius_m=40.0",
+             "turn.angle_rad=1.5708", "initial_speed_mps=19.0", "duration_s=10.0",
+             "friction.change_ahead_m=10.0", "friction.mu_before=0.3", "friction.mu_turn=0.9",
+             "turn.direction=left", "planner.reference_curve_fraction=0.9")
+    verdict, m = _gt_turn(drawn)
+    assert verdict.feasibility_class is FeasibilityClass.FEASIBLE
+    assert not m.left_lane, f"GT left its lane by {m.max_lane_excursion_m:.2f} m"
+
+
 @pytest.mark.slow
 @seed(38)
 @settings(_CLOSED_LOOP, max_examples=POPUP_DRAWS)

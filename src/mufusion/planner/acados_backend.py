@@ -38,6 +38,7 @@ from mufusion.planner.ocp import (
     polygon_rows,
     slack_penalties,
 )
+from mufusion.planner.stability import state_bounds
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -96,6 +97,7 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "hpipm_mode": hpipm_mode,
             "steering_rate_limit": config.steering_rate_limit,
             "load_transfer": config.load_transfer,
+            "stability_envelope": config.stability_envelope,
             # The parameter vector's layout (planner/ocp.py's Param).
             "n_params": N_PARAMS,
             "utilization": config.utilization_factor,
@@ -262,10 +264,7 @@ class AcadosBackend:
         if max_front_brake_force_n is not None:
             # F_xf is the second-last bounded input (F_xr last, see _input_bounds).
             lbu[:, -2] = np.maximum(lbu[:, -2], -np.asarray(max_front_brake_force_n, float))
-        lbx = np.empty((n, 2))
-        lbx[:, 0], lbx[:, 1] = d_lo, min_speed_mps
-        ubx = np.empty((n, 2))
-        ubx[:, 0], ubx[:, 1] = d_hi, MAX_SPEED_MPS
+        lbx, ubx = state_bounds(d_lo, d_hi, min_speed_mps, guess_x, p, self.config)
         args = (x0, guess_x, guess_u, p, yref, weights, lbx, ubx, ubu, lbu)
         self.last_solve_retried = False
         status, xs, us = self._fast.solve(*args)
@@ -353,10 +352,11 @@ def _describe(
     x0_example = np.zeros(nx)
     x0_example[State.vx] = 10.0
     ocp.constraints.x0 = x0_example
-    ocp.constraints.idxbx = np.array([State.d, State.vx])
-    ocp.constraints.lbx = np.array([-1.0, 0.0])
-    ocp.constraints.ubx = np.array([1.0, MAX_SPEED_MPS])
-    ocp.constraints.idxsbx = np.array([0])
+    envelope = 2 * int(config.stability_envelope)  # ψ̇ and v_y, soft, written per solve
+    ocp.constraints.idxbx = np.array([State.d, State.vx, State.psidot, State.vy][: 2 + envelope])
+    box = np.array([[-1.0, 0.0, -10.0, -10.0], [1.0, MAX_SPEED_MPS, 10.0, 10.0]])
+    ocp.constraints.lbx, ocp.constraints.ubx = box[:, : 2 + envelope]
+    ocp.constraints.idxsbx = np.array([0, 2, 3][: 1 + envelope])
     ocp.constraints.idxbx_e = np.array([State.d])
     ocp.constraints.lbx_e = np.array([-1.0])
     ocp.constraints.ubx_e = np.array([1.0])
@@ -370,12 +370,13 @@ def _describe(
     ocp.constraints.uh = np.full(rows.count, rows.upper)
     # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
     # follows the state, which at stage 0 is fixed, so the rear polygon is soft. acados
-    # orders a stage's slacks as the soft bounds (d) first, then the soft h rows, which is
-    # the layout of SlackPenalties.
+    # orders a stage's slacks as the soft bounds (d, the envelope's priced as d's) first, then
+    # the soft h rows: the layout of SlackPenalties, the envelope's inserted after d's.
     ocp.constraints.idxsh = np.arange(rows.per_axle, rows.count)
     penalties = slack_penalties(config.weights, rows.per_axle)
-    ocp.cost.zl = ocp.cost.zu = penalties.linear_stage
-    ocp.cost.Zl = ocp.cost.Zu = penalties.quadratic_stage
+    l1, l2 = penalties.linear_stage, penalties.quadratic_stage
+    ocp.cost.zl = ocp.cost.zu = np.insert(l1, 1, [l1[0]] * envelope)
+    ocp.cost.Zl = ocp.cost.Zu = np.insert(l2, 1, [l2[0]] * envelope)
     ocp.cost.zl_e = ocp.cost.zu_e = penalties.linear_terminal
     ocp.cost.Zl_e = ocp.cost.Zu_e = penalties.quadratic_terminal
 

@@ -151,6 +151,9 @@ class PlannerConfig:
     # requires and keeps the rest as a reserve for braking the plans lose at the turn-in
     # (docs/decisions/0031, "A braking reserve in the speed reference").
     reference_braking_fraction: float = 0.8
+    # Share of the polygon's lateral reach (λ cos(π/n)) the reference's curve speeds assume:
+    # below 1 the reference reaches a curve slower than the polygon allows (docs/decisions/0065).
+    reference_curve_fraction: float = 1.0
     # The reference regains speed from the vehicle's own no faster than the cruise traction cap
     # on the g-g ellipse allows (planner/speed_profile.py, ``regain_limited_profile_mps``).
     reference_regain_limit: bool = True
@@ -163,6 +166,10 @@ class PlannerConfig:
     # Each stage's front braking also bounded by the lowest μ̂ under the front axle from the
     # stage's start to one torque lag later, where it is below the stage's (docs/decisions/0064).
     axle_friction: bool = True
+    # Each stage's yaw rate bounded (soft) by μ̂ g / v at the guess's speed, with a margin
+    # and body slip by 0.02 μ̂ g (planner/stability.py; issue 38, mechanism B; acados only;
+    # on: GT 0.28-0.30 m out there where main is 0.33-0.39 m, docs/decisions/0065).
+    stability_envelope: bool = False
 
     def __post_init__(self) -> None:
         if self.stiffness not in STIFFNESS_MODELS:
@@ -194,6 +201,9 @@ class PlannerConfig:
             raise ValueError(
                 f"max_cruise_accel_mps2 must be in (0, 10] m/s², got {self.max_cruise_accel_mps2}"
             )
+        if not 0.0 < self.reference_curve_fraction <= 1.0:
+            raise ValueError("reference_curve_fraction must be in (0, 1], "
+                             f"got {self.reference_curve_fraction}")
         if not 0.0 < self.reference_braking_fraction <= 1.0:
             raise ValueError("reference_braking_fraction must be in (0, 1], "
                              f"got {self.reference_braking_fraction}")

@@ -106,7 +106,8 @@ def iterate(
                 + max(float(x0[State.vx]), 0.0) * par.torque_time_constant_s)
             speed_ref = curve_speed_reference_mps(
                 guess_x[:, State.s], curvature_of_s, mu_ref, reference_speed_mps,
-                cfg.utilization_factor * np.cos(np.pi / cfg.polygon_sides),
+                cfg.reference_curve_fraction * cfg.utilization_factor
+                * np.cos(np.pi / cfg.polygon_sides),
                 cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
                 (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2)
                 if cfg.reference_regain_limit and mode == "cruise" else None,

@@ -85,6 +85,8 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         use_sampling=cfg.planner.use_sampling,
         curve_speed_reference=cfg.planner.curve_speed_reference,
         reference_braking_fraction=cfg.planner.reference_braking_fraction,
+        reference_curve_fraction=cfg.planner.reference_curve_fraction,
+        stability_envelope=cfg.planner.stability_envelope,
         reference_regain_limit=cfg.planner.reference_regain_limit,
         steering_rate_limit=cfg.planner.steering_rate_limit,
         load_transfer=cfg.planner.load_transfer,

@@ -143,6 +143,13 @@ class PlannerSettings(_Strict):
     rest as a reserve (the curves' limit speeds are unchanged). The default 0.8 keeps a fifth
     of it for the braking that plans lose while they turn in (docs/decisions/0031, "A braking
     reserve in the speed reference")."""
+    reference_curve_fraction: Annotated[float, Field(gt=0.0, le=1.0)] = (
+        PlannerConfig.reference_curve_fraction)
+    """Share of the friction polygon's lateral reach the speed reference's curve speeds assume:
+    1 reaches a curve at the polygon's limit speed, less slower (docs/decisions/0065)."""
+    stability_envelope: bool = PlannerConfig.stability_envelope
+    """Soft yaw-rate and body-slip bounds from μ̂ in the OCP (acados;
+    :mod:`mufusion.planner.stability`, docs/decisions/0065)."""
     reference_regain_limit: bool = PlannerConfig.reference_regain_limit
     """In cruise, the speed reference regains speed from the vehicle's own no faster than the
     drive's acceleration cap on the g-g ellipse allows (less while cornering); ``false``: the
