@@ -161,7 +161,7 @@ def test_gt_keeps_its_lane_in_feasible_general_turns(drawn) -> None:
 # plans exceed |ψ̇| ≤ μ̂ g / v and the body slip reaches 0.18-0.20 rad, 0.33-0.39 m out. Strict:
 # this fails once a fix keeps the lane, until the marker goes.
 @pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="issue 38 mechanism B: no stability envelope yet")
+                   reason="issue 38 mechanism B: the envelope measured short (decision 0065)")
 @pytest.mark.slow
 def test_gt_keeps_its_lane_on_the_rise_onto_a_40_m_arc_at_19_mps() -> None:
     drawn = (*_campaign(TURN_GRID).overrides, "vehicle=truck", "turn.radius_m=40.0",
