@@ -15,6 +15,7 @@ from mufusion.planner.speed_profile import (
     curve_speed_reference_mps,
     max_speed_profile_mps,
     regain_limited_profile_mps,
+    sharpest_under_axles,
 )
 from mufusion.vehicle.params import GRAVITY_MPS2, TRUCK
 from mufusion.vehicle.planner_model import State
@@ -144,6 +145,22 @@ def test_plan_enters_the_arc_at_the_speed_it_can_hold(planners) -> None:
     # Tracking the cruise speed alone, the plans brake as late as their horizon allows and the
     # vehicle reaches the arc far above what it can hold there (11.4 m/s when this was written).
     assert v_without > v_with + 1.0
+
+
+def test_the_reference_reaches_the_curve_speed_before_the_front_axle_and_a_torque_lag() -> None:
+    """With the curvature under the axles (as the planner builds its reference) the arc's speed
+    is reached where the front axle plus one torque lag at the speed reaches the arc; at the
+    centre of gravity's curvature the reference is still above it there."""
+    speed, fraction, mu = 18.0, 0.9 * math.cos(math.pi / 12), 0.9
+    ahead = TRUCK.cog_to_front_axle_m + speed * TRUCK.torque_time_constant_s
+    s = np.array([ARC_START_M - ahead - 30.0, ARC_START_M - ahead, ARC_START_M])
+    v_arc = math.sqrt(fraction * mu * GRAVITY_MPS2 * RADIUS_M)
+    kappa = sharpest_under_axles(_curvature, TRUCK.cog_to_rear_axle_m, ahead)
+    at_axles = curve_speed_reference_mps(s, kappa, _mu(mu), speed, fraction, 4.0)
+    at_cog = curve_speed_reference_mps(s, _curvature, _mu(mu), speed, fraction, 4.0)
+    assert at_axles[1] <= v_arc + 0.05
+    assert at_cog[1] > v_arc + 0.5
+    assert at_axles[2] == pytest.approx(at_cog[2], abs=0.05)
 
 
 def _textbook_profile(s, kappa, mu, accel_fraction, end_speed):

@@ -35,6 +35,7 @@ from mufusion.planner.ocp import (
     PlannerConfig,
     constraint_expressions,
     longitudinal_force_bounds_n,
+    ocp_rear_stiffness,
     polygon_rows,
     slack_penalties,
 )
@@ -49,7 +50,7 @@ from mufusion.vehicle.planner_model import (
 )
 
 _log = logging.getLogger(__name__)
-_FORMAT_VERSION = "7"
+_FORMAT_VERSION = "8"
 
 # The problem's and the iterate's batch access compiled into the solver (acados' custom-update
 # hook). One call writes the whole problem and initial guess, one reads the whole solution,
@@ -69,7 +70,6 @@ _ITERATE_H = "mufusion_iterate.h"
 _TEMPLATES = resources.files("mufusion.planner") / "acados_c"
 _ITERATE_HEADER = (_TEMPLATES / "mufusion_iterate.h.in").read_text(encoding="utf-8")
 _ITERATE_SOURCE = (_TEMPLATES / "mufusion_iterate.c.in").read_text(encoding="utf-8")
-
 
 _WRITE, _READ = 1.0, 2.0
 """Modes of ``_ITERATE_SOURCE``."""
@@ -319,7 +319,7 @@ def _describe(
     # F_yf slot is the force's rate (planner/front_force.py).
     forces = tire_forces(x, u) if config.steering_rate_limit else u
     f = frenet_bicycle_dynamics(x[:N_STATES], forces, p[Param.curvature],
-                                p[Param.rear_stiffness], params)
+                                ocp_rear_stiffness(p, forces, params, config.load_transfer), params)
     if config.steering_rate_limit:
         f = ca.vertcat(f, u[Input.fyf])
     model.f_expl_expr = f

@@ -26,6 +26,7 @@ from mufusion.planner.ocp import (
     PlannerConfig,
     constraint_expressions,
     longitudinal_force_bounds_n,
+    ocp_rear_stiffness,
     polygon_rows,
     slack_penalties,
 )
@@ -56,8 +57,9 @@ class CasadiBackend:
             return tire_forces(xx, uu) if augmented else uu
 
         def f(xx):
-            dx = frenet_bicycle_dynamics(xx[:N_STATES], forces(xx, u), p[Param.curvature],
-                                         p[Param.rear_stiffness], params)
+            fs = forces(xx, u)
+            dx = frenet_bicycle_dynamics(xx[:N_STATES], fs, p[Param.curvature], ocp_rear_stiffness(
+                p, fs, params, config.load_transfer), params)
             return ca.vertcat(dx, u[Input.fyf]) if augmented else dx
 
         # As acados' ERK: stage_steps RK4 steps per stage (planner/integration.py).

@@ -25,6 +25,8 @@ from mufusion.planner.config import PlannerObstacle as PlannerObstacle
 from mufusion.planner.config import PlausibilityLimits as PlausibilityLimits
 from mufusion.planner.corridor import MAX_SWING_HEADING_RAD as MAX_SWING_HEADING_RAD
 from mufusion.planner.corridor import lateral_corridor as lateral_corridor
+from mufusion.planner.penalties import SlackPenalties as SlackPenalties
+from mufusion.planner.penalties import slack_penalties as slack_penalties
 from mufusion.planner.plan import StageParameters
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
@@ -32,6 +34,7 @@ from mufusion.vehicle.planner_model import (
     N_STATES,
     Input,
     State,
+    floored_rear_load_n,
     normal_loads_n,
     rear_cornering_stiffness_n_per_rad,
     rear_lateral_force_n,
@@ -194,6 +197,24 @@ def axle_friction(mu_hat_of_s, axle_s_m: np.ndarray, reach_m: np.ndarray) -> np.
     return _clipped_mu(lowest)
 
 
+def plan_rear_stiffness(c_r: Any, guess_rear_load_n: Any, forces: Any, params: VehicleParams,
+                        load_transfer: bool) -> Any:
+    """The linear rear tire's stiffness [N/rad] at the plan's own rear load: with
+    ``load_transfer`` the stage's ``c_r`` (at the guess's load ``guess_rear_load_n``) times the
+    ratio of the loads, as the polygons take them (a tire's stiffness is proportional to its
+    load; docs/decisions/0066); without, ``c_r``. numpy (``forces (3, N)``) or CasADi."""
+    if not load_transfer:
+        return c_r
+    floor = MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2
+    return c_r * floored_rear_load_n(forces, params, floor) / guess_rear_load_n
+
+
+def ocp_rear_stiffness(p: Any, forces: Any, params: VehicleParams, load_transfer: bool) -> Any:
+    """:func:`plan_rear_stiffness` of a stage's parameter vector ``p`` (CasADi)."""
+    guess_load = p[Param.radius_rear] / p[Param.utilized_friction]
+    return plan_rear_stiffness(p[Param.rear_stiffness], guess_load, forces, params, load_transfer)
+
+
 def plan_polygon_radii_n(
     inputs: np.ndarray, stage: StageParameters, params: VehicleParams, load_transfer: bool
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -266,7 +287,7 @@ def constraint_expressions(
     import casadi as ca
 
     normals, ratio = polygon_directions(n_sides)
-    fyr = rear_lateral_force_n(x, p[Param.rear_stiffness], params)
+    fyr = rear_lateral_force_n(x, ocp_rear_stiffness(p, u, params, load_transfer), params)
     if not load_transfer:
         half = normals[: polygon_rows(n_sides, load_transfer=False).per_axle]
         front = [(nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front]
@@ -284,50 +305,6 @@ def constraint_expressions(
     rear = [(nx * u[Input.fxr] + ny * fyr - limit_rear) / p[Param.radius_rear]
             for nx, ny in normals]
     return ca.vertcat(*front, *rear)
-
-
-@dataclass(frozen=True)
-class SlackPenalties:
-    """Exact-penalty weights of the soft constraints, per slack variable (lower = upper side).
-
-    Soft at stages 1..N−1: the corridor bound on ``d`` (one slack), then the rear polygon's rows
-    (:func:`polygon_rows`); at the terminal stage N: the corridor bound only. The penalty of a slack
-    ``σ ≥ 0`` is ``linear σ + quadratic σ² / 2``; acados multiplies stage penalties by ``dt``
-    (the terminal one not), and the reference backend does the same.
-    """
-
-    linear_stage: np.ndarray
-    quadratic_stage: np.ndarray
-    linear_terminal: np.ndarray
-    quadratic_terminal: np.ndarray
-
-    @property
-    def corridor(self) -> slice:
-        """Index of the corridor slack within a stage's slacks."""
-        return slice(0, 1)
-
-    @property
-    def rear_polygon(self) -> slice:
-        """Indices of the rear-polygon slacks within a stage's slacks."""
-        return slice(1, None)
-
-
-def slack_penalties(weights: CostWeights, rear_rows: int) -> SlackPenalties:
-    """The one place the soft constraints and their penalties are laid out (both backends).
-
-    Examples
-    --------
-    >>> pen = slack_penalties(CostWeights(), 6)
-    >>> pen.linear_stage.shape, pen.linear_terminal.shape, float(pen.linear_stage[pen.corridor][0])
-    ((7,), (1,), 10000.0)
-    """
-    n_stage = 1 + rear_rows
-    return SlackPenalties(
-        linear_stage=np.full(n_stage, weights.slack_l1),
-        quadratic_stage=np.full(n_stage, weights.slack_l2),
-        linear_terminal=np.full(1, weights.slack_l1),
-        quadratic_terminal=np.full(1, weights.slack_l2),
-    )
 
 
 def tracking_reference(

@@ -22,6 +22,7 @@ from mufusion.planner.ocp import (
     axle_loads_n,
     lateral_corridor,
     plan_polygon_radii_n,
+    plan_rear_stiffness,
     stage_parameters,
     tracking_reference,
 )
@@ -31,7 +32,11 @@ from mufusion.planner.safeguards import (
     SanitizedFriction,
     judge_solution,
 )
-from mufusion.planner.speed_profile import curve_speed_reference_mps, lowest_under_axles
+from mufusion.planner.speed_profile import (
+    curve_speed_reference_mps,
+    lowest_under_axles,
+    sharpest_under_axles,
+)
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import State, rear_lateral_force_n
 
@@ -100,12 +105,14 @@ def iterate(
             # The reference brakes with the friction the axles meet when the torque lands
             # (docs/decisions/0055): the rear axle behind the CoG, the front axle ahead of
             # it and one torque lag further.
-            mu_ref = lowest_under_axles(
-                mu_of_s, par.cog_to_rear_axle_m,
-                par.cog_to_front_axle_m
-                + max(float(x0[State.vx]), 0.0) * par.torque_time_constant_s)
+            # The same span bounds the curvature: the curve's speed is reached before the front
+            # axle, and a brake torque commanded for it, enter the curve (docs/decisions/0066).
+            ahead_m = (par.cog_to_front_axle_m
+                       + max(float(x0[State.vx]), 0.0) * par.torque_time_constant_s)
+            mu_ref = lowest_under_axles(mu_of_s, par.cog_to_rear_axle_m, ahead_m)
+            kappa_ref = sharpest_under_axles(curvature_of_s, par.cog_to_rear_axle_m, ahead_m)
             speed_ref = curve_speed_reference_mps(
-                guess_x[:, State.s], curvature_of_s, mu_ref, reference_speed_mps,
+                guess_x[:, State.s], kappa_ref, mu_ref, reference_speed_mps,
                 cfg.reference_curve_fraction * cfg.utilization_factor
                 * np.cos(np.pi / cfg.polygon_sides),
                 cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
@@ -169,7 +176,8 @@ def plan_of(
     xs, us = states_inputs
     stage = solved.stage
     good = solved.reason is FallbackReason.NONE
-    fyr = rear_lateral_force_n(xs[:-1].T, stage.rear_stiffness_n_per_rad, par)
+    fyr = rear_lateral_force_n(xs[:-1].T, plan_rear_stiffness(
+        stage.rear_stiffness_n_per_rad, stage.fzr_n, us.T, par, cfg.load_transfer), par)
     # The loads and radii the plan was solved with (its own, with load transfer).
     limit_front, limit_rear = plan_polygon_radii_n(us, stage, par, cfg.load_transfer)
     load_front, load_rear = stage.fzf_n, stage.fzr_n

@@ -36,6 +36,7 @@ from mufusion.planner.ocp import (
     PlausibilityLimits,
     longitudinal_force_bounds_n,
     plan_polygon_radii_n,
+    plan_rear_stiffness,
     polygon_directions,
 )
 from mufusion.planner.plan import FallbackReason, StageParameters
@@ -141,7 +142,7 @@ class SanitizedFriction:
 
 def judged_rear_rows_n(
     states: np.ndarray, inputs: np.ndarray, stage: StageParameters,
-    params: VehicleParams, normals: np.ndarray,
+    params: VehicleParams, normals: np.ndarray, load_transfer: bool = False,
 ) -> np.ndarray:
     """The rear polygon's rows ``(n_sides, N)`` [N] of a solution as :func:`check_solution` judges
     them: ``normals @ (F_xr, F_yr)`` with the linear rear tire's ``F_yr`` at the plan's states,
@@ -152,7 +153,10 @@ def judged_rear_rows_n(
     every plan of a sliding vehicle is rejected, exactly when it needs one (docs/decisions/0051,
     "A check that judges the solver").
     """
-    fyr = rear_lateral_force_n(np.asarray(states)[:-1].T, stage.rear_stiffness_n_per_rad, params)
+    us = np.asarray(inputs, dtype=float)
+    stiffness = plan_rear_stiffness(stage.rear_stiffness_n_per_rad, stage.fzr_n, us.T, params,
+                                    load_transfer)
+    fyr = rear_lateral_force_n(np.asarray(states)[:-1].T, stiffness, params)
     fyr[0] = 0.0
     return normals @ np.stack([np.asarray(inputs)[:, Input.fxr], fyr])
 
@@ -202,7 +206,7 @@ def judge_solution(
     normals, ratio = polygon_directions(n_sides)
     radius_front, radius_rear = plan_polygon_radii_n(us, stage, params, load_transfer)
     front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
-    rear = judged_rear_rows_n(xs, us, stage, params, normals)
+    rear = judged_rear_rows_n(xs, us, stage, params, normals, load_transfer)
     lower, upper = longitudinal_force_bounds_n(params)
     slack = limits.force_bound_tolerance * np.maximum(np.abs(lower), np.abs(upper))
     fx = us[:, [Input.fxf, Input.fxr]]

@@ -211,6 +211,35 @@ def lowest_under_axles(
     return lowest
 
 
+def sharpest_under_axles(
+    curvature_of_s: Callable[[np.ndarray], np.ndarray], behind_m: float, ahead_m: float
+) -> Callable[[np.ndarray], np.ndarray]:
+    """``κ(s)`` replaced by the sharpest curvature (largest ``|κ|``, its sign kept) from
+    ``behind_m`` behind to ``ahead_m`` ahead of ``s`` [m] (at those two points and at ``s``).
+
+    :func:`lowest_under_axles` for the road's curvature: with ``s`` the centre of gravity's, a
+    reference that reaches a curve's speed only where the centre of gravity enters it still
+    brakes while the front axle turns in, and a brake torque commanded at its end lands one
+    torque lag later, inside the curve. Braking while turning in at the curve's limit speed
+    unloads the rear axle the curve needs (docs/decisions/0066).
+
+    Examples
+    --------
+    >>> kappa = sharpest_under_axles(lambda s: np.where(np.asarray(s) < 10.0, 0.0, -0.05),
+    ...                              1.5, 4.0)
+    >>> kappa(np.array([5.0, 6.5, 11.0, 12.0])).tolist()
+    [0.0, -0.05, -0.05, -0.05]
+    """
+
+    def sharpest(s_m: np.ndarray) -> np.ndarray:
+        s = np.asarray(s_m, dtype=float)
+        candidates = np.stack([np.asarray(curvature_of_s(s + offset), dtype=float)
+                               * np.ones_like(s) for offset in (-behind_m, 0.0, ahead_m)])
+        return np.take_along_axis(candidates, np.abs(candidates).argmax(axis=0)[None], 0)[0]
+
+    return sharpest
+
+
 def curve_speed_reference_mps(
     stage_s_m: np.ndarray,
     curvature_of_s: Callable[[np.ndarray], np.ndarray],

@@ -290,6 +290,13 @@ def rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleP
     )
 
 
+def floored_rear_load_n(forces: Any, params: VehicleParams, floor_n: float) -> Any:
+    """Rear normal load [N] of the longitudinal forces ``forces[Input.fxf] + forces[Input.fxr]``
+    (pitch load transfer, :func:`normal_loads_n`), at least ``floor_n``; numpy rows or CasADi."""
+    total = forces[Input.fxf] + forces[Input.fxr]
+    return _ops(total)[2](normal_loads_n(total / params.mass_kg, params)[1], floor_n)
+
+
 def _rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleParams,
                           fmax: Any) -> Any:
     vx = fmax(x[_VX], MIN_SPEED_FOR_SLIP_MPS)

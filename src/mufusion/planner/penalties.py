@@ -1,0 +1,54 @@
+"""The soft constraints' exact-penalty layout, shared by both backends (planner/ocp.py re-exports
+it)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mufusion.planner.config import CostWeights
+
+
+@dataclass(frozen=True)
+class SlackPenalties:
+    """Exact-penalty weights of the soft constraints, per slack variable (lower = upper side).
+
+    Soft at stages 1..N−1: the corridor bound on ``d`` (one slack), then the rear polygon's rows
+    (:func:`polygon_rows`); at the terminal stage N: the corridor bound only. The penalty of a slack
+    ``σ ≥ 0`` is ``linear σ + quadratic σ² / 2``; acados multiplies stage penalties by ``dt``
+    (the terminal one not), and the reference backend does the same.
+    """
+
+    linear_stage: np.ndarray
+    quadratic_stage: np.ndarray
+    linear_terminal: np.ndarray
+    quadratic_terminal: np.ndarray
+
+    @property
+    def corridor(self) -> slice:
+        """Index of the corridor slack within a stage's slacks."""
+        return slice(0, 1)
+
+    @property
+    def rear_polygon(self) -> slice:
+        """Indices of the rear-polygon slacks within a stage's slacks."""
+        return slice(1, None)
+
+
+def slack_penalties(weights: CostWeights, rear_rows: int) -> SlackPenalties:
+    """The one place the soft constraints and their penalties are laid out (both backends).
+
+    Examples
+    --------
+    >>> pen = slack_penalties(CostWeights(), 6)
+    >>> pen.linear_stage.shape, pen.linear_terminal.shape, float(pen.linear_stage[pen.corridor][0])
+    ((7,), (1,), 10000.0)
+    """
+    n_stage = 1 + rear_rows
+    return SlackPenalties(
+        linear_stage=np.full(n_stage, weights.slack_l1),
+        quadratic_stage=np.full(n_stage, weights.slack_l2),
+        linear_terminal=np.full(1, weights.slack_l1),
+        quadratic_terminal=np.full(1, weights.slack_l2),
+    )
