@@ -58,9 +58,9 @@ def test_rti_closed_loop_matches_reference_nlp(backend, load_transfer):
     # With load transfer the rear tire's stiffness follows the plan's own braking (decision
     # 0066), a product of forces and states that one real-time iteration linearises: on this
     # road the RTI brakes a little more before the drop (0.15 m/s below the NLP after 3 s when
-    # this was written), never less.
+    # this was written, 0.15 m less distance), never less.
     assert np.max(a[:, State.vx] - b[:, State.vx]) < 0.05
     assert np.max(np.abs(a[:, State.vx] - b[:, State.vx])) < (0.25 if load_transfer else 0.05)
-    assert np.max(np.abs(a[:, State.s] - b[:, State.s])) < 0.05
+    assert np.max(np.abs(a[:, State.s] - b[:, State.s])) < (0.25 if load_transfer else 0.05)
     # The loop actually did something: it corrected the initial offset and sped up.
     assert abs(a[-1, State.d]) < 0.3 and a[:, State.vx].max() > 14.5

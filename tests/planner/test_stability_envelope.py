@@ -16,7 +16,7 @@ from mufusion.planner.stability import (
     yaw_rate_bound_rps,
 )
 from mufusion.vehicle.params import GRAVITY_MPS2
-from mufusion.vehicle.planner_model import N_STATES, State
+from mufusion.vehicle.planner_model import N_STATES, State, normal_loads_n
 
 CONFIG = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=3.95)
 
@@ -72,8 +72,11 @@ def test_a_solver_with_the_envelope_keeps_the_plans_yaw_rate_inside() -> None:
         mu, speed = 0.3, 15.0
         guess_x, p = _problem(cfg, np.full(n, mu), np.full(n + 1, speed))
         guess_x[:, State.s] = speed * cfg.dt_s * np.arange(n + 1)
-        p[:, Param.rear_stiffness] = 3e5
         p[:, Param.radius_front] = p[:, Param.radius_rear] = mu * TRUCK.mass_kg * GRAVITY_MPS2
+        # The rear stiffness applies at the guess's rear load, the rear radius over λ μ̂, and
+        # follows the plan's own (decision 0066): 3e5 N/rad at the static load.
+        guess_load = p[:, Param.radius_rear] / p[:, Param.utilized_friction]
+        p[:, Param.rear_stiffness] = 3e5 * guess_load / normal_loads_n(0.0, TRUCK)[1]
         guess_u = np.zeros((n, 3))
         bound = float(yaw_rate_bound_rps(np.array([mu]), np.array([speed]))[0])
         yref = np.zeros((n + 1, N_STATES + 3))
