@@ -94,7 +94,8 @@ def test_the_ocp_rows_and_dynamics_take_the_same_stiffness_as_the_plan() -> None
         fyr = float(rear_lateral_force_n(state, numpy_c[0], TRUCK))
         normals, ratio = polygon_directions(12)
         limit = ratio * LAMBDA * MU * _rear_load_n(total)
-        expected = (normals @ np.array([forces[0, Input.fxr], fyr]) - limit) / stage.radius_rear_n[0]
+        rear = np.array([forces[0, Input.fxr], fyr])
+        expected = (normals @ rear - limit) / stage.radius_rear_n[0]
         got = np.asarray(rows(state, forces[0], stage.p[0])).ravel()[12:]
         np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-9)
 
