@@ -9,7 +9,7 @@ docs/performance.md, section "## Planner".
 ``python benchmarks/planner.py --capture`` instead times our planner's step with the solver's
 output captured at the file-descriptor level (as every run does, ``mufusion.sim.solver_output``)
 and without, alternating, three runs each, and prints both medians as a JSON line
-(docs/performance.md, "Quiet output").
+(docs/performance-tests.md, "Quiet output").
 
 ``python benchmarks/planner.py --margins`` instead runs the shipped scenarios (pop-up and turn, all
 five configurations, and the pop-up with ``emergency_on_obstacle=true``) and prints, as a JSON

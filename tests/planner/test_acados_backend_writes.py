@@ -22,7 +22,7 @@ CONFIG = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=3.95)
 
 def _solve_through_the_wrapper(self, x0, guess_x, guess_u, p, yref, weights, lbx, ubx, ubu,
                                lbu):
-    """The reference: every stage and field through the Cython wrapper's public set calls
+    """The reference: every stage and field through acados' wrapper's public set calls
     (the lower input bounds, as the one-call writer, only when they differ from the generated
     ones or did at the last solve)."""
     s, n = self.solver, self.n

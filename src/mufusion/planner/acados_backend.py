@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
-import importlib.util
+import io
 import json
 import logging
 from importlib import resources
@@ -14,7 +15,6 @@ from typing import Any
 import numpy as np
 
 from mufusion.planner.acados_loader import (
-    AcadosUnavailable,
     build_lock,
     cache_dir,
     load_acados_template,
@@ -54,7 +54,7 @@ _FORMAT_VERSION = "8"
 
 # The problem's and the iterate's batch access compiled into the solver (acados' custom-update
 # hook). One call writes the whole problem and initial guess, one reads the whole solution,
-# where the Cython wrapper's set/get take one call per stage and field (≈ 300 per solve).
+# where the wrapper's set/get take one call per stage and field (≈ 300 per solve).
 # ``data[0]`` is the mode:
 #   1  write ``[1, x_0 (stage 0's bounds), p_0 … p_N, yref_0 … yref_N, W_0 … W_N (column-major),
 #      ubu_0 … ubu_{N-1}, set_lbu, lbu_0 … lbu_{N-1}, lbx_1 … lbx_N, ubx_1 … ubx_N, x_0 … x_N,
@@ -121,7 +121,7 @@ class _GeneratedSolver:
         digest = problem_hash(params, config, hpipm_mode)
         export = cache_dir() / f"tamp_{digest}"
         name = f"tamp_{digest}"
-        lib = export / "acados_ocp_solver_pyx.so"
+        lib = export / f"libacados_ocp_solver_{name}.so"
         with build_lock(export):  # another process may be building this very solver
             if not lib.exists():
                 # The problem description is needed only to generate the code (the hash names it).
@@ -131,17 +131,15 @@ class _GeneratedSolver:
                 (export / _ITERATE_H).write_text(_ITERATE_HEADER.format(name=name))
                 (export / _ITERATE_C).write_text(
                     _ITERATE_SOURCE.format(name=name, upper=name.upper()))
-                at.AcadosOcpSolver.build(str(export), with_cython=True, verbose=False)
-        # The template imports the wrapper by a cwd-relative module path; load it by file instead.
-        spec = importlib.util.spec_from_file_location("acados_ocp_solver_pyx", lib)
-        if spec is None or spec.loader is None:
-            raise AcadosUnavailable(f"cannot load the generated solver {lib}")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
+                # acados' ctypes wrapper, not its Cython one: each call below is one C call
+                # either way, and the Cython module's 1.9 MB of C took 6 of a build's 8.5 s.
+                at.AcadosOcpSolver.build(str(export), with_cython=False, verbose=False)
+        with contextlib.redirect_stdout(io.StringIO()):  # it prints whether OpenMP is in
+            self.solver = at.AcadosOcpSolver(None, json_file=str(export / "ocp.json"),
+                                             build=False, generate=False, verbose=False)
         self.n = n
         self.augmented = config.steering_rate_limit
         self.polygon_sides, self.dt_s = config.polygon_sides, config.dt_s
-        self.solver = module.AcadosOcpSolverCython(name, "SQP_RTI", n)
         self._generated_lbu = np.tile(_input_bounds(params, config)[0], (n, 1))
         self._lbu_changed = False
 

@@ -6,7 +6,7 @@ a ``reproduce`` printed 87 such lines between its progress bars. :func:`captured
 descriptor 1 at a temporary file for the length of a run and hands back the lines; the runner
 stores them in the run log (``solver_messages.txt``) and the metrics count them. It is done once
 around a run, not around each solve: the planner's step pays nothing for it
-(docs/performance.md, "Quiet output").
+(docs/performance-tests.md, "Quiet output").
 """
 
 from __future__ import annotations
