@@ -81,166 +81,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
 from enum import StrEnum
 
 import numpy as np
 
 from mufusion.configurations import MU_HAT_MAX, FrictionEstimate
 from mufusion.fusion import Z95, declared_upper_bound, local_surface_bound
-from mufusion.planner import PlannerObstacle
-from mufusion.road.geometry import rectangle_corners, rectangles_overlap, signed_clearance_m
 
-# The settings live apart (the scenario schema reads them); importers of this module keep them.
+# The plan's geometric checks and the settings live apart; importers of this module keep them.
+from mufusion.sim.plan_checks import planned_footprint_violation_m as planned_footprint_violation_m
+from mufusion.sim.plan_checks import planned_obstacle_clearance_m as planned_obstacle_clearance_m
+from mufusion.sim.plan_checks import planned_obstacle_hit as planned_obstacle_hit
 from mufusion.sim.settings import LaneRecoverySettings as LaneRecoverySettings
 from mufusion.sim.settings import ProbingSettings
-from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
-from mufusion.vehicle.planner_model import State
-
-
-def planned_footprint_violation_m(
-    states: np.ndarray,
-    curvature_1pm: np.ndarray,
-    lane_bounds_m: tuple[float, float],
-    params: VehicleParams,
-) -> float:
-    """How far a plan's predicted footprint leaves its lane [m] (0 inside).
-
-    ``lane_bounds_m`` bound the reference point (the band's edges shrunk by half the vehicle
-    width and by the planner's footprint margin, ``FOOTPRINT_MARGIN_M`` = 0.1 m for the
-    scenarios), so the footprint may reach ``lane_bounds_m[0] − w/2`` and
-    ``lane_bounds_m[1] + w/2``: that margin inside the edges, which a plan must leave for the
-    plant's tracking error.
-    A body point ``x`` ahead of the reference point and ``y`` left of it lies
-    ``d + x sin Δψ + y cos Δψ − κ x² / 2`` from the lane centre (to second order in ``x κ``; the
-    last term is the chord of a curve of curvature ``κ``): the four corners of each planned
-    state are checked, not the reference point alone, which on a curve and yawed against the
-    lane is up to the body's swing and bulge inside the corners.
-
-    Parameters
-    ----------
-    states
-        Planned states ``(K, 6)`` (:class:`~mufusion.vehicle.planner_model.State`).
-    curvature_1pm
-        Road curvature at the states' ``s`` [1/m], ``(K,)`` or a scalar.
-    lane_bounds_m
-        ``(d_min, d_max)`` of the reference point [m].
-    params
-        Vehicle dimensions (width, length, axle positions).
-
-    Examples
-    --------
-    >>> from mufusion.vehicle.params import TRUCK
-    >>> x = np.zeros((2, 6)); x[:, State.d] = [0.0, 0.5]
-    >>> round(planned_footprint_violation_m(x, 0.0, (-0.45, 0.45), TRUCK), 6)
-    0.05
-    """
-    x = np.asarray(states, dtype=float)
-    d, dpsi = x[:, State.d], x[:, State.dpsi]
-    kappa = np.broadcast_to(np.asarray(curvature_1pm, dtype=float), d.shape)
-    half_w = 0.5 * params.width_m
-    sin_dpsi, cos_dpsi = np.sin(dpsi), np.cos(dpsi)
-    ends = [d + a * sin_dpsi - 0.5 * kappa * a * a
-            for a in (params.cog_to_body_front_m, -params.cog_to_body_rear_m)]
-    lowest = np.minimum(ends[0], ends[1]) - half_w * cos_dpsi
-    highest = np.maximum(ends[0], ends[1]) + half_w * cos_dpsi
-    lo, hi = lane_bounds_m
-    return float(max(0.0, np.max(lo - half_w - lowest, initial=0.0),
-                     np.max(highest - hi - half_w, initial=0.0)))
-
-
-def planned_obstacle_clearance_m(
-    states: np.ndarray,
-    obstacles: Sequence[PlannerObstacle],
-    params: VehicleParams,
-    dt_s: float = 0.0,
-) -> float:
-    """Smallest gap between a plan's predicted footprints and the obstacles [m], negative when
-    they overlap (minus the depth); ``inf`` without obstacles.
-
-    Footprints and obstacles are rectangles in road coordinates ``(s, d)``, the footprint
-    centred ``params.body_centre_ahead_of_cog_m`` ahead of the reference point along the heading
-    error: exact on a straight road, the planner's own frame on a curved one. Row ``k`` of
-    ``states`` is ``k · dt_s`` after the first: a moving obstacle is where it is then.
-
-    Examples
-    --------
-    >>> from mufusion.planner import PlannerObstacle
-    >>> from mufusion.vehicle.params import TRUCK
-    >>> x = np.zeros((1, 6)); x[0, State.s] = 0.0
-    >>> ob = PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)
-    >>> gap = 20.0 - 0.5 - TRUCK.cog_to_body_front_m  # obstacle's near edge − footprint's front
-    >>> bool(np.isclose(planned_obstacle_clearance_m(x, [ob], TRUCK), gap))
-    True
-    """
-    if not obstacles:
-        return math.inf
-    x = np.asarray(states, dtype=float)
-    s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
-    ahead = params.body_centre_ahead_of_cog_m
-    ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
-                            params.length_m, params.width_m)
-    return min(float(np.min(signed_clearance_m(ego, box)))
-               for box in _obstacle_corners(obstacles, len(s), dt_s))
-
-
-def _obstacle_corners(
-    obstacles: Sequence[PlannerObstacle], rows: int, dt_s: float
-) -> list[np.ndarray]:
-    """Each obstacle's corners in ``(s, d)``: ``(4, 2)``, or ``(rows, 4, 2)`` for a moving one,
-    row ``k`` where it is ``k · dt_s`` after the first."""
-    times_s = dt_s * np.arange(rows, dtype=float)
-    return [rectangle_corners(ob.s_m + ob.speed_mps * times_s if ob.speed_mps else ob.s_m,
-                              ob.d_m, 0.0, ob.length_m, ob.width_m)
-            for ob in obstacles]
-
-
-def planned_obstacle_hit(
-    states: np.ndarray,
-    obstacles: Sequence[PlannerObstacle],
-    params: VehicleParams,
-    dt_s: float = 0.0,
-) -> bool:
-    """Whether a plan's predicted footprints overlap an obstacle: the same answer as
-    ``planned_obstacle_clearance_m(states, obstacles, params, dt_s) < 0.0``, at a fraction of
-    its cost.
-
-    Only where a footprint's bounding box overlaps an obstacle's (the obstacles are axis-aligned
-    in ``(s, d)``) can the rectangles overlap: the separating-axis test of
-    :func:`~mufusion.road.geometry.signed_clearance_m` projects onto the obstacle's edge normals,
-    the coordinate axes, and these projections are the boxes' extents bit for bit, so where the
-    boxes do not overlap its penetration is ≤ 0 and the clearance the distance, ≥ 0. The other
-    states are judged by that penetration itself
-    (:func:`~mufusion.road.geometry.rectangles_overlap`: the clearance is negative exactly where
-    it is positive). Non-finite input takes the full computation.
-
-    Examples
-    --------
-    >>> from mufusion.planner import PlannerObstacle
-    >>> from mufusion.vehicle.params import TRUCK
-    >>> x = np.zeros((2, 6)); x[:, State.s] = [0.0, 20.0]
-    >>> planned_obstacle_hit(x, [PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)],
-    ...                      TRUCK)
-    True
-    """
-    if not obstacles:
-        return False
-    x = np.asarray(states, dtype=float)
-    boxes = _obstacle_corners(obstacles, len(x), dt_s)
-    if not (np.all(np.isfinite(x)) and all(np.all(np.isfinite(box)) for box in boxes)):
-        return planned_obstacle_clearance_m(x, obstacles, params, dt_s) < 0.0
-    s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
-    ahead = params.body_centre_ahead_of_cog_m
-    ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
-                            params.length_m, params.width_m)
-    ego_lo, ego_hi = ego.min(axis=-2), ego.max(axis=-2)
-    for box in boxes:
-        overlap = np.minimum(ego_hi, box.max(axis=-2)) - np.maximum(ego_lo, box.min(axis=-2))
-        near = np.all(overlap > 0.0, axis=-1)
-        if np.any(near) and bool(np.any(
-                rectangles_overlap(ego[near], box[near] if box.ndim == 3 else box))):
-            return True
-    return False
+from mufusion.vehicle.params import GRAVITY_MPS2
 
 
 def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
