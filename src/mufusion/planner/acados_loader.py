@@ -91,25 +91,11 @@ def load_acados_template() -> ModuleType:
     os.environ.setdefault("ACADOS_SOURCE_DIR", str(install))
     os.environ.setdefault("ACADOS_PYTHON_INTERFACE_PATH", str(acados.TEMPLATE_DIR))
     os.environ.setdefault("TERA_PATH", str(acados.TERA_PATH))
-    # The generated Makefile calls `cython` by name; with an interpreter run from a venv that was
-    # never activated, its bin/ is not on PATH and the wrapper build fails.
-    bindir = str(Path(sys.executable).parent)
-    if bindir not in os.environ.get("PATH", "").split(os.pathsep):
-        os.environ["PATH"] = bindir + os.pathsep + os.environ.get("PATH", "")
     try:
         for name in _LIBRARIES:
             ctypes.CDLL(str(install / "lib" / name), mode=ctypes.RTLD_GLOBAL)
     except OSError as exc:
         raise AcadosUnavailable(f"acados libraries failed to load: {exc}") from exc
-    # The Cython wrapper's build looks for the template under install/interfaces; a fresh venv
-    # (CI) lacks this link, so it is made here at run time.
-    link = install / "interfaces" / "acados_template" / "acados_template"
-    if not link.exists():
-        try:
-            link.parent.mkdir(parents=True, exist_ok=True)
-            link.symlink_to(Path("..") / ".." / ".." / "acados_template")
-        except OSError as exc:
-            raise AcadosUnavailable(f"cannot create {link}: {exc}") from exc
     # The template prints a CasADi-version notice on import (it is tested against older CasADi;
     # code generation works with ours, see docs/planner.md); it is noise in every run's output.
     with contextlib.redirect_stdout(io.StringIO()):
