@@ -180,25 +180,25 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
 
 def solution_margins() -> dict[str, float]:
     """Largest excursions of accepted solutions towards the solution check's limits."""
-    import mufusion.planner.planner as planner_module
+    import mufusion.planner.rti as rti_module
     from mufusion.scenarios import load_scenario
     from mufusion.scenarios.runner import run_scenario
 
     worst = {"front_polygon_excess": -np.inf, "rear_polygon_excess": -np.inf,
              "force_bound_excess": -np.inf, "corridor_excess_m": -np.inf,
              "abs_heading_error_rad": 0.0, "min_speed_mps": np.inf}
-    check = planner_module.check_solution
+    judge = rti_module.judge_solution
 
     def measuring_check(xs, us, stage, d_lo, d_hi, params, n_sides, limits, *, load_transfer):
-        reason = check(xs, us, stage, d_lo, d_hi, params, n_sides, limits,
+        judged = judge(xs, us, stage, d_lo, d_hi, params, n_sides, limits,
                        load_transfer=load_transfer)
-        if reason.value != "none":
-            return reason
+        if judged[0].value != "none":
+            return judged
         normals, ratio = polygon_directions(n_sides)
         # The radii the plan was solved with (its own loads with load transfer).
         radius_front, radius_rear = plan_polygon_radii_n(us, stage, params, load_transfer)
         front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
-        rear = judged_rear_rows_n(xs, us, stage, params, normals)
+        rear = judged_rear_rows_n(xs, us, stage, params, normals, load_transfer=load_transfer)
         lower, upper = longitudinal_force_bounds_n(params)
         fx = us[:, [Input.fxf, Input.fxr]]
         bound = np.maximum(lower - fx, fx - upper) / np.maximum(np.abs(lower), np.abs(upper))
@@ -212,9 +212,9 @@ def solution_margins() -> dict[str, float]:
         ):
             worst[key] = max(worst[key], float(value))
         worst["min_speed_mps"] = min(worst["min_speed_mps"], float(xs[:, State.vx].min()))
-        return reason
+        return judged
 
-    planner_module.check_solution = measuring_check
+    rti_module.judge_solution = measuring_check
     try:
         runs = [(name, [], c) for name in ("popup", "turn")
                 for c in ("GT", "L", "P", "F", "F-safe")]
@@ -222,7 +222,7 @@ def solution_margins() -> dict[str, float]:
         for name, overrides, configuration in runs:
             run_scenario(load_scenario(name, overrides), configuration)
     finally:
-        planner_module.check_solution = check
+        rti_module.judge_solution = judge
     return {key: round(value, 3) for key, value in worst.items()}
 
 

@@ -48,10 +48,10 @@ class PlausibilityLimits:
     MAX_SPEED_MPS + speed_tolerance_mps]``.
     """
 
-    # Defaults sit well outside what accepted solutions reach in the shipped scenarios (all
-    # configurations, emergency mode included: front 0, rear 0.75, bounds 0, corridor 1.5 m,
-    # heading 0.95 rad, speed −0.01 m/s; `python benchmarks/planner.py --margins`) and well
-    # inside a diverged solution.
+    # Defaults sit outside what accepted solutions reach in the shipped scenarios (all
+    # configurations, emergency mode included: front 0, rear 2.27 (1.10 before the rear tire
+    # followed the plan's own load, decision 0066), bounds 0, corridor 1.5 m, heading 0.40 rad,
+    # speed −0.01 m/s; `python benchmarks/planner.py --margins`) and well inside a diverged one.
     front_polygon_tolerance: float = 0.05
     rear_polygon_tolerance: float = 3.0
     force_bound_tolerance: float = 0.05

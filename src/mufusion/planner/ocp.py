@@ -34,7 +34,7 @@ from mufusion.vehicle.planner_model import (
     N_STATES,
     Input,
     State,
-    floored_rear_load_n,
+    floored_axle_loads_n,
     normal_loads_n,
     rear_cornering_stiffness_n_per_rad,
     rear_lateral_force_n,
@@ -76,10 +76,8 @@ def axle_loads_n(inputs: np.ndarray, params: VehicleParams) -> tuple[np.ndarray,
     """Axle loads ``(F_zf, F_zr)`` [N] per stage of the forces ``inputs (N, 3)``: pitch load
     transfer of ``a_x = (F_xf + F_xr) / m``, each floored at :data:`MIN_LOAD_SHARE` of the
     weight (what the polygons use)."""
-    us = np.asarray(inputs, dtype=float)
-    fzf, fzr = normal_loads_n((us[:, Input.fxf] + us[:, Input.fxr]) / params.mass_kg, params)
-    floor = MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2
-    return np.maximum(fzf, floor), np.maximum(fzr, floor)
+    return floored_axle_loads_n(np.asarray(inputs, dtype=float).T, params,
+                                MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2)
 
 
 def longitudinal_force_bounds_n(params: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
@@ -206,7 +204,7 @@ def plan_rear_stiffness(c_r: Any, guess_rear_load_n: Any, forces: Any, params: V
     if not load_transfer:
         return c_r
     floor = MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2
-    return c_r * floored_rear_load_n(forces, params, floor) / guess_rear_load_n
+    return c_r * floored_axle_loads_n(forces, params, floor)[1] / guess_rear_load_n
 
 
 def ocp_rear_stiffness(p: Any, forces: Any, params: VehicleParams, load_transfer: bool) -> Any:
@@ -294,10 +292,9 @@ def constraint_expressions(
                  for nx, ny in half]
         rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] for nx, ny in half]
         return ca.vertcat(*front, *rear)
-    floor = MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2
-    fzf, fzr = normal_loads_n((u[Input.fxf] + u[Input.fxr]) / params.mass_kg, params)
-    limit_front = ratio * p[Param.utilized_friction] * ca.fmax(fzf, floor)
-    limit_rear = ratio * p[Param.utilized_friction] * ca.fmax(fzr, floor)
+    fzf, fzr = floored_axle_loads_n(u, params, MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2)
+    limit_front = ratio * p[Param.utilized_friction] * fzf
+    limit_rear = ratio * p[Param.utilized_friction] * fzr
     front = [
         (nx * u[Input.fxf] + ny * u[Input.fyf] - limit_front) / p[Param.radius_front]
         for nx, ny in normals

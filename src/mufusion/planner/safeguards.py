@@ -142,7 +142,7 @@ class SanitizedFriction:
 
 def judged_rear_rows_n(
     states: np.ndarray, inputs: np.ndarray, stage: StageParameters,
-    params: VehicleParams, normals: np.ndarray, load_transfer: bool = False,
+    params: VehicleParams, normals: np.ndarray, *, load_transfer: bool,
 ) -> np.ndarray:
     """The rear polygon's rows ``(n_sides, N)`` [N] of a solution as :func:`check_solution` judges
     them: ``normals @ (F_xr, F_yr)`` with the linear rear tire's ``F_yr`` at the plan's states,
@@ -206,7 +206,7 @@ def judge_solution(
     normals, ratio = polygon_directions(n_sides)
     radius_front, radius_rear = plan_polygon_radii_n(us, stage, params, load_transfer)
     front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
-    rear = judged_rear_rows_n(xs, us, stage, params, normals, load_transfer)
+    rear = judged_rear_rows_n(xs, us, stage, params, normals, load_transfer=load_transfer)
     lower, upper = longitudinal_force_bounds_n(params)
     slack = limits.force_bound_tolerance * np.maximum(np.abs(lower), np.abs(upper))
     fx = us[:, [Input.fxf, Input.fxr]]

@@ -290,11 +290,14 @@ def rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleP
     )
 
 
-def floored_rear_load_n(forces: Any, params: VehicleParams, floor_n: float) -> Any:
-    """Rear normal load [N] of the longitudinal forces ``forces[Input.fxf] + forces[Input.fxr]``
-    (pitch load transfer, :func:`normal_loads_n`), at least ``floor_n``; numpy rows or CasADi."""
+def floored_axle_loads_n(forces: Any, params: VehicleParams, floor_n: float) -> tuple[Any, Any]:
+    """Axle loads ``(F_zf, F_zr)`` [N] of the longitudinal forces ``forces[Input.fxf] +
+    forces[Input.fxr]`` (pitch load transfer, :func:`normal_loads_n`), each at least
+    ``floor_n``; numpy rows or CasADi."""
     total = forces[Input.fxf] + forces[Input.fxr]
-    return _ops(total)[2](normal_loads_n(total / params.mass_kg, params)[1], floor_n)
+    fmax = _ops(total)[2]
+    fzf, fzr = normal_loads_n(total / params.mass_kg, params)
+    return fmax(fzf, floor_n), fmax(fzr, floor_n)
 
 
 def _rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleParams,
