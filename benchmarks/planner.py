@@ -19,6 +19,7 @@ line, how far the solutions the planner accepted went towards the limits of its 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import sys
@@ -256,6 +257,20 @@ def main() -> None:
     config = PlannerConfig(lane_d_min_m=LANE[0], lane_d_max_m=LANE[1], use_sampling=True)
     if "--capture" in sys.argv[1:]:
         print(json.dumps(capture_cost(config)))
+        return
+    if "--torque-lag" in sys.argv[1:]:
+        # The OCP with the longitudinal forces as lagging states (9 states) against the
+        # default (7), alternating so that a busy machine weighs on both alike.
+        runs: dict[bool, list[np.ndarray]] = {False: [], True: []}
+        for _ in range(3):
+            for lag in (False, True):
+                runs[lag].append(run_ours(dataclasses.replace(config, torque_lag=lag)))
+        off, on = (np.concatenate(runs[lag]) for lag in (False, True))
+        print(json.dumps({"median_step_ms": round(float(np.median(off)), 3),
+                          "torque_lag_median_step_ms": round(float(np.median(on)), 3),
+                          "p99_step_ms": round(float(np.percentile(off, 99)), 3),
+                          "torque_lag_p99_step_ms": round(float(np.percentile(on, 99)), 3),
+                          "ratio": round(float(np.median(on) / np.median(off)), 2)}))
         return
     ours = run_ours(config)
     theirs = run_dompc(config)

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from mufusion.planner import acados_backend
-from mufusion.planner.front_force import augmented_problem, plan_from_augmented
 from mufusion.planner.ocp import PlannerConfig, PlannerObstacle
+from mufusion.planner.ocp_state import augmented_problem, plan_from_augmented
 from mufusion.planner.planner import TractionAdaptivePlanner
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.planner_model import N_INPUTS, N_STATES
@@ -29,9 +29,9 @@ def _solve_through_the_wrapper(self, x0, guess_x, guess_u, p, yref, weights, lbx
     changed = not np.array_equal(lbu, self._generated_lbu)
     write_lbu = changed or self._lbu_changed
     self._lbu_changed = changed
-    if self.augmented:
+    if self.layout.augmented:
         x0, guess_x, guess_u = augmented_problem(
-            x0, guess_x, guess_u, p, self.polygon_sides, self.dt_s)
+            x0, guess_x, guess_u, p, self.params, self.config, self.layout)
     s.set(0, "lbx", x0)
     s.set(0, "ubx", x0)
     w_stage = np.diag(weights[: N_STATES + N_INPUTS])
@@ -56,8 +56,8 @@ def _solve_through_the_wrapper(self, x0, guess_x, guess_u, p, yref, weights, lbx
     status = s.solve()
     xs = np.array([s.get(k, "x") for k in range(n + 1)])
     us = np.array([s.get(k, "u") for k in range(n)])
-    if self.augmented:
-        xs, us = plan_from_augmented(xs, us)
+    if self.layout.augmented:
+        xs, us = plan_from_augmented(xs, us, self.layout)
     return int(status), xs, us
 
 

@@ -11,15 +11,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mufusion.planner.acados_backend import AcadosBackend
-from mufusion.planner.front_force import (
-    FRONT_FORCE,
+from mufusion.planner.front_force import front_force_rate_bound_n_per_s
+from mufusion.planner.ocp import Param, PlannerConfig, polygon_directions
+from mufusion.planner.ocp_state import (
     INITIAL_FORCE_SHARE,
     augmented_problem,
-    front_force_rate_bound_n_per_s,
-    ocp_state_count,
+    ocp_state,
     plan_from_augmented,
 )
-from mufusion.planner.ocp import Param, PlannerConfig, polygon_directions
 from mufusion.planner.planner import TractionAdaptivePlanner
 from mufusion.vehicle.params import CAR, TRUCK
 from mufusion.vehicle.planner_model import N_STATES, Input, secant_stiffness_factor
@@ -44,9 +43,16 @@ def test_rate_bound_by_hand():
             > front_force_rate_bound_n_per_s(TRUCK, config))
 
 
+# The front force alone a state (the longitudinal forces' lag: tests/planner/test_ocp_state.py).
+FRONT_ONLY = PlannerConfig(torque_lag=False, dt_s=DT)
+LAYOUT = ocp_state(FRONT_ONLY, TRUCK)
+FRONT_FORCE = N_STATES
+
+
 def test_state_count_follows_the_switch():
-    assert ocp_state_count(PlannerConfig(steering_rate_limit=False)) == N_STATES
-    assert ocp_state_count(PlannerConfig()) == N_STATES + 1  # the product's default
+    assert ocp_state(PlannerConfig(steering_rate_limit=False, torque_lag=False), TRUCK).nx == (
+        N_STATES)
+    assert LAYOUT.nx == N_STATES + 1 and LAYOUT.front_force == FRONT_FORCE
 
 
 def _stage_params(radius_front_n: float) -> np.ndarray:
@@ -67,14 +73,15 @@ def test_translation_round_trip(fyf, seed):
     guess_u[:, Input.fyf] = fyf
     x0 = guess_x[0] + 0.1
     radius = 5e4  # every force of the draw lies inside the first stage's inscribed radius
-    x0a, xa, ua = augmented_problem(x0, guess_x, guess_u, _stage_params(radius), 12, DT)
+    x0a, xa, ua = augmented_problem(x0, guess_x, guess_u, _stage_params(radius), TRUCK,
+                                    FRONT_ONLY, LAYOUT)
     assert x0a.shape == (N_STATES + 1,) and xa.shape == (N + 1, N_STATES + 1)
     np.testing.assert_array_equal(x0a[:N_STATES], x0)
     assert x0a[FRONT_FORCE] == guess_u[0, Input.fyf] == xa[0, FRONT_FORCE]
     # The rate input integrates to the force states.
     np.testing.assert_allclose(xa[0, FRONT_FORCE] + DT * np.cumsum(ua[:, Input.fyf]),
                                xa[1:, FRONT_FORCE], atol=1e-6)
-    xs, us = plan_from_augmented(xa, ua)
+    xs, us = plan_from_augmented(xa, ua, LAYOUT)
     np.testing.assert_array_equal(xs, guess_x)
     np.testing.assert_array_equal(us, guess_u)
 
@@ -83,7 +90,8 @@ def test_initial_force_clipped_into_the_first_polygon():
     guess_x = np.zeros((N + 1, N_STATES))
     guess_u = np.zeros((N, 3))
     guess_u[:, Input.fyf] = -3e4  # after μ̂ dropped, outside a 2e4 N polygon
-    x0a, xa, ua = augmented_problem(guess_x[0], guess_x, guess_u, _stage_params(2e4), 12, DT)
+    x0a, xa, ua = augmented_problem(guess_x[0], guess_x, guess_u, _stage_params(2e4), TRUCK,
+                                    FRONT_ONLY, LAYOUT)
     _, ratio = polygon_directions(12)
     assert x0a[FRONT_FORCE] == pytest.approx(-INITIAL_FORCE_SHARE * ratio * 2e4)
     assert xa[0, FRONT_FORCE] == x0a[FRONT_FORCE] and xa[1, FRONT_FORCE] == -3e4
@@ -104,7 +112,7 @@ def _largest_rates(backend: str, vehicle, rate_limit: bool, steps: int = 25):
     authors' settings)."""
     config = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=0.45, use_sampling=False,
                            backend=backend, steering_rate_limit=rate_limit,
-                           load_transfer=rate_limit)
+                           load_transfer=rate_limit, torque_lag=rate_limit)
     # acados in its fast mode only: the slow steering's solver is this test's alone, and its
     # robust twin would be built only for a retry, which a failed solve would need (a failed
     # solve fails the test anyway).

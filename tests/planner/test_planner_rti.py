@@ -39,11 +39,13 @@ def _inside(force_x, force_y, radius, n_sides, tol=1e-3):
 
 @pytest.fixture(scope="session")
 def free_force_planner() -> TractionAdaptivePlanner:
-    """The paper's planner: the front force a free input (no steering-rate limit) and the
-    polygons at the static axle loads (the authors' settings' solver, which ``reproduce`` uses)."""
+    """The paper's planner: the forces free inputs (no steering-rate limit, no torque lag) and
+    the polygons at the static axle loads (the authors' settings' solver, which ``reproduce``
+    uses)."""
     return TractionAdaptivePlanner(TRUCK, PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=0.45,
                                                         steering_rate_limit=False,
-                                                        load_transfer=False))
+                                                        load_transfer=False,
+                                                        torque_lag=False))
 
 
 # Starting inside the curve with no yaw rate needs the front force at once: the free-force

@@ -175,6 +175,20 @@ def test_gt_keeps_its_lane_on_the_rise_onto_a_40_m_arc_at_19_mps() -> None:
     assert not m.left_lane, f"GT left its lane by {m.max_lane_excursion_m:.2f} m"
 
 
+# Decision 0068: the same run with the longitudinal forces as OCP states that follow the torques'
+# lag (not the default: it enters other curves faster) keeps the lane; the free forces
+# alternated braking and driving from stage to stage.
+@pytest.mark.slow
+def test_gt_keeps_its_lane_on_that_rise_with_the_torque_lag_in_the_plans() -> None:
+    drawn = (*_campaign(TURN_GRID).overrides, "vehicle=truck", "turn.radius_m=40.0",
+             "turn.angle_rad=1.5708", "initial_speed_mps=19.0", "duration_s=10.0",
+             "friction.change_ahead_m=10.0", "friction.mu_before=0.3", "friction.mu_turn=0.9",
+             "turn.direction=left", "planner.torque_lag=true")
+    verdict, m = _gt_turn(drawn)
+    assert verdict.feasibility_class is FeasibilityClass.FEASIBLE
+    assert not m.left_lane, f"GT left its lane by {m.max_lane_excursion_m:.2f} m"
+
+
 # Decision 0065: the same run with the speed reference's curve speeds at 0.9 of the polygon's
 # lateral reach (not the default: measured on the grids first) keeps the lane.
 @pytest.mark.slow

@@ -19,14 +19,7 @@ from mufusion.planner.acados_loader import (
     cache_dir,
     load_acados_template,
 )
-from mufusion.planner.front_force import (
-    FRONT_FORCE,
-    augmented_problem,
-    front_force_rate_bound_n_per_s,
-    ocp_state_count,
-    plan_from_augmented,
-    tire_forces,
-)
+from mufusion.planner.front_force import front_force_rate_bound_n_per_s
 from mufusion.planner.integration import stage_steps
 from mufusion.planner.ocp import (
     MAX_SPEED_MPS,
@@ -39,6 +32,13 @@ from mufusion.planner.ocp import (
     polygon_rows,
     slack_penalties,
 )
+from mufusion.planner.ocp_state import (
+    augmented_problem,
+    force_rates,
+    ocp_state,
+    plan_from_augmented,
+    tire_forces,
+)
 from mufusion.planner.stability import state_bounds
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
@@ -50,7 +50,7 @@ from mufusion.vehicle.planner_model import (
 )
 
 _log = logging.getLogger(__name__)
-_FORMAT_VERSION = "8"
+_FORMAT_VERSION = "9"
 
 # The problem's and the iterate's batch access compiled into the solver (acados' custom-update
 # hook). One call writes the whole problem and initial guess, one reads the whole solution,
@@ -97,6 +97,7 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "hpipm_mode": hpipm_mode,
             "steering_rate_limit": config.steering_rate_limit,
             "load_transfer": config.load_transfer,
+            "torque_lag": config.torque_lag,
             "stability_envelope": config.stability_envelope,
             # The parameter vector's layout (planner/ocp.py's Param).
             "n_params": N_PARAMS,
@@ -138,8 +139,8 @@ class _GeneratedSolver:
             self.solver = at.AcadosOcpSolver(None, json_file=str(export / "ocp.json"),
                                              build=False, generate=False, verbose=False)
         self.n = n
-        self.augmented = config.steering_rate_limit
-        self.polygon_sides, self.dt_s = config.polygon_sides, config.dt_s
+        self.layout = ocp_state(config, params)
+        self.params, self.config = params, config
         self._generated_lbu = np.tile(_input_bounds(params, config)[0], (n, 1))
         self._lbu_changed = False
 
@@ -159,16 +160,16 @@ class _GeneratedSolver:
         """Write the problem and the guess in one call, run one RTI step, read the plan.
 
         Takes and returns the planner's states ``(N+1, 6)`` and forces ``(N, 3)``; with the
-        steering's rate limit the OCP's front-force state is formed and dropped here."""
+        force states (planner/ocp_state.py) the OCP's state is formed and dropped here."""
         n = self.n
         # The lower bounds as generated need no write; after a solve that changed them, one
         # more restores them.
         changed = not np.array_equal(lbu, self._generated_lbu)
         write_lbu = changed or self._lbu_changed
         self._lbu_changed = changed
-        if self.augmented:
+        if self.layout.augmented:
             x0, guess_x, guess_u = augmented_problem(
-                x0, guess_x, guess_u, p, self.polygon_sides, self.dt_s)
+                x0, guess_x, guess_u, p, self.params, self.config, self.layout)
         w_stage = np.diag(weights[: N_STATES + N_INPUTS])
         # The layout of _ITERATE_SOURCE's mode 1; the terminal stage takes the last stage's
         # parameters, the reference's and weights' state part and the lateral bound only.
@@ -188,8 +189,8 @@ class _GeneratedSolver:
         split = 1 + guess_x.size
         xs = plan[1:split].reshape(guess_x.shape)
         us = plan[split:].reshape(guess_u.shape)
-        if self.augmented:
-            xs, us = plan_from_augmented(xs, us)
+        if self.layout.augmented:
+            xs, us = plan_from_augmented(xs, us, self.layout)
         return int(status), xs, us
 
     def _exchange(self, data: np.ndarray) -> None:
@@ -307,19 +308,18 @@ def _describe(
     ocp = at.AcadosOcp()
     model = at.AcadosModel()
     model.name = name
-    nx = ocp_state_count(config)
+    layout = ocp_state(config, params)
+    nx = layout.nx
     x = ca.SX.sym("x", nx)
     u = ca.SX.sym("u", N_INPUTS)
     p = ca.SX.sym("p", N_PARAMS)
     model.x, model.u, model.p = x, u, p
     model.xdot = ca.SX.sym("xdot", nx)
-    # With the steering's rate limit the tire forces are (F_yf state, F_xf, F_xr) and the input's
-    # F_yf slot is the force's rate (planner/front_force.py).
-    forces = tire_forces(x, u) if config.steering_rate_limit else u
+    # The tire forces: those that are states (planner/ocp_state.py), the inputs' otherwise.
+    forces = tire_forces(x, u, layout)
     f = frenet_bicycle_dynamics(x[:N_STATES], forces, p[Param.curvature],
                                 ocp_rear_stiffness(p, forces, params, config.load_transfer), params)
-    if config.steering_rate_limit:
-        f = ca.vertcat(f, u[Input.fyf])
+    f = ca.vertcat(f, *force_rates(x, u, layout))
     model.f_expl_expr = f
     model.f_impl_expr = model.xdot - f
     model.con_h_expr = constraint_expressions(x[:N_STATES], forces, p, params, ns,
@@ -333,13 +333,14 @@ def _describe(
     ocp.cost.cost_type_e = "LINEAR_LS"
     # y = [planner state (6), F_yf, F_xf, F_xr]: the tracking reference's layout. With the
     # steering's rate limit the F_yf weight acts on the force state; the rate is bounded only.
+    # The longitudinal weights act on the inputs, the commands where the forces lag.
     vx = np.zeros((ny, nx))
     vx[:N_STATES, :N_STATES] = np.eye(N_STATES)
     vu = np.zeros((ny, N_INPUTS))
     vu[N_STATES:, :] = np.eye(N_INPUTS)
-    if config.steering_rate_limit:
+    if layout.front_force is not None:
         vu[N_STATES + Input.fyf, Input.fyf] = 0.0
-        vx[N_STATES + Input.fyf, FRONT_FORCE] = 1.0
+        vx[N_STATES + Input.fyf, layout.front_force] = 1.0
     ocp.cost.Vx, ocp.cost.Vu = vx, vu
     ocp.cost.Vx_e = np.eye(N_STATES, nx)
     ocp.cost.W = np.eye(ny)

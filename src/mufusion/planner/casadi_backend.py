@@ -11,13 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from mufusion.planner.front_force import (
-    augmented_problem,
-    front_force_rate_bound_n_per_s,
-    ocp_state_count,
-    plan_from_augmented,
-    tire_forces,
-)
+from mufusion.planner.front_force import front_force_rate_bound_n_per_s
 from mufusion.planner.integration import stage_steps
 from mufusion.planner.ocp import (
     MAX_SPEED_MPS,
@@ -29,6 +23,14 @@ from mufusion.planner.ocp import (
     ocp_rear_stiffness,
     polygon_rows,
     slack_penalties,
+)
+from mufusion.planner.ocp_state import (
+    augmented_problem,
+    cost_forces,
+    force_rates,
+    ocp_state,
+    plan_from_augmented,
+    tire_forces,
 )
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import N_INPUTS, N_STATES, Input, State, frenet_bicycle_dynamics
@@ -46,21 +48,21 @@ class CasadiBackend:
         n, ns, dt = config.horizon_steps, config.polygon_sides, config.dt_s
         rows = polygon_rows(ns, load_transfer=config.load_transfer)
         pen = slack_penalties(config.weights, rows.per_axle)
-        augmented = config.steering_rate_limit
-        nx = ocp_state_count(config)
+        layout = ocp_state(config, params)
+        nx = layout.nx
         x = ca.SX.sym("x", nx)
         u = ca.SX.sym("u", N_INPUTS)
         p = ca.SX.sym("p", N_PARAMS)
 
         def forces(xx, uu):
-            # With the steering's rate limit F_yf is a state and the input's slot its rate.
-            return tire_forces(xx, uu) if augmented else uu
+            # The forces that are states (planner/ocp_state.py), the inputs' otherwise.
+            return tire_forces(xx, uu, layout)
 
         def f(xx):
             fs = forces(xx, u)
             dx = frenet_bicycle_dynamics(xx[:N_STATES], fs, p[Param.curvature], ocp_rear_stiffness(
                 p, fs, params, config.load_transfer), params)
-            return ca.vertcat(dx, u[Input.fyf]) if augmented else dx
+            return ca.vertcat(dx, *force_rates(xx, u, layout))
 
         # As acados' ERK: stage_steps RK4 steps per stage (planner/integration.py).
         h_step = dt / stage_steps(config, params)
@@ -98,7 +100,7 @@ class CasadiBackend:
         cost: Any = 0
         g, lbg, ubg = [X[:, 0] - X0], [0.0] * nx, [0.0] * nx
         for k in range(n):
-            r = ca.vertcat(X[:N_STATES, k], forces(X[:, k], U[:, k])) - YREF[:, k]
+            r = ca.vertcat(X[:N_STATES, k], cost_forces(X[:, k], U[:, k], layout)) - YREF[:, k]
             cost += dt * 0.5 * ca.sum1(WD * r**2)
             for slack in (S_rl[:, k], S_ru[:, k]):
                 cost += dt * slack_cost(slack, pen.linear_stage[rear], pen.quadratic_stage[rear])
@@ -131,7 +133,7 @@ class CasadiBackend:
         r_e = X[:N_STATES, n] - YREF[:N_STATES, n]
         cost += 0.5 * ca.sum1(WD[:N_STATES] * r_e**2)
 
-        self._nx, self._augmented = nx, augmented
+        self._nx, self._layout = nx, layout
         self._n_x = nx * (n + 1)
         self._n_u = N_INPUTS * n
         z = ca.vertcat(ca.vec(X), ca.vec(U), S_lo, S_hi, ca.vec(S_rl), ca.vec(S_ru))
@@ -144,7 +146,8 @@ class CasadiBackend:
              "ipopt.max_iter": 300, "ipopt.sb": "yes"},
         )
         lower, upper = longitudinal_force_bounds_n(params)
-        rate = front_force_rate_bound_n_per_s(params, config) if augmented else np.inf
+        rate = (front_force_rate_bound_n_per_s(params, config) if config.steering_rate_limit
+                else np.inf)
         lbu = np.tile([-rate, lower[0], lower[1]], (n, 1))
         ubu = np.tile([rate, upper[0], upper[1]], (n, 1))
         self._lbu, self._ubu = lbu, ubu
@@ -161,9 +164,9 @@ class CasadiBackend:
         if max_front_brake_force_n is not None:
             brake = np.asarray(max_front_brake_force_n, dtype=float)
             lbu[:, Input.fxf] = np.maximum(lbu[:, Input.fxf], -brake)
-        if self._augmented:
+        if self._layout.augmented:
             x0, guess_x, guess_u = augmented_problem(
-                x0, guess_x, guess_u, p, self.config.polygon_sides, self.config.dt_s)
+                x0, guess_x, guess_u, p, self.params, self.config, self._layout)
         lbx_x = np.full((n + 1, self._nx), -np.inf)
         ubx_x = np.full((n + 1, self._nx), np.inf)
         # vx bounds at stages 1..N-1 are hard, as in the acados description.
@@ -178,8 +181,8 @@ class CasadiBackend:
         z = np.asarray(sol["x"]).ravel()
         xs = z[: self._n_x].reshape(n + 1, self._nx)
         us = z[self._n_x : self._n_x + self._n_u].reshape(n, N_INPUTS)
-        if self._augmented:
-            xs, us = plan_from_augmented(xs, us)
+        if self._layout.augmented:
+            xs, us = plan_from_augmented(xs, us, self._layout)
         return (0 if ok else 1), xs, us
 
     def reset(self) -> None:

@@ -163,6 +163,10 @@ class PlannerConfig:
     # The friction polygons' radii follow the axle loads of the plan's own longitudinal forces
     # (pitch load transfer inside the OCP) instead of the guess's (beyond the paper).
     load_transfer: bool = True
+    # Plan the longitudinal forces as states that follow their commands with the wheel torques'
+    # first-order lag (planner/ocp_state.py; beyond the paper). Off: measured on the grids, it
+    # keeps issue 38's mechanism B in lane but enters some curves faster (docs/decisions/0068).
+    torque_lag: bool = False
     # Each stage's front braking also bounded by the lowest μ̂ under the front axle from the
     # stage's start to one torque lag later, where it is below the stage's (docs/decisions/0064).
     axle_friction: bool = True

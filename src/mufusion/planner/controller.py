@@ -191,15 +191,64 @@ class TrackingController:
             share_front = par.cog_to_rear_axle_m / par.wheelbase_m
             extra_f, extra_r = share_front * extra_force, (1.0 - share_front) * extra_force
         r = par.wheel_radius_m
+        measured = (g.torque_compensation and torques_now_nm is not None
+                    and all(map(math.isfinite, torques_now_nm)))
+        if g.torque_compensation and self.config is not None and self.config.torque_lag:
+            # The plan's forces follow the lag already (planner/ocp_state.py): the torques go
+            # where the plan has them one controller period ahead, exactly (dead-beat), or, with
+            # no measurement, the plan's own commands of the stage.
+            period = 1.0 / g.rate_hz
+            if measured:
+                assert torques_now_nm is not None
+                target = lagged_forces_n(plan, t_s + period, par.torque_time_constant_s)
+                gain = self._torque_gain
+                torque_f = (target[0] + extra_f) * r
+                torque_r = (target[1] + extra_r) * r
+                torque_f += gain * (torque_f - torques_now_nm[0])
+                torque_r += gain * (torque_r - torques_now_nm[1])
+            else:
+                commands = stage_commands_n(plan, k, par.torque_time_constant_s)
+                torque_f = (commands[0] + extra_f) * r
+                torque_r = (commands[1] + extra_r) * r
+            return ActuatorCommand(delta, torque_f, torque_r).clipped(par)
         torque_f = (float(u_long[Input.fxf]) + extra_f) * r
         torque_r = (float(u_long[Input.fxr]) + extra_r) * r
         # A measurement that is not finite is not fed back (feed-forward only).
-        if (g.torque_compensation and torques_now_nm is not None
-                and all(map(math.isfinite, torques_now_nm))):
+        if measured:
+            assert torques_now_nm is not None
             gain = self._torque_gain
             torque_f += gain * ((float(u[Input.fxf]) + extra_f) * r - torques_now_nm[0])
             torque_r += gain * ((float(u[Input.fxr]) + extra_r) * r - torques_now_nm[1])
         return ActuatorCommand(delta, torque_f, torque_r).clipped(par)
+
+
+def stage_commands_n(plan: Plan, k: int, tau_s: float) -> tuple[float, float]:
+    """The longitudinal force commands ``(F_xf, F_xr)`` [N] of a plan's stage ``k`` whose forces
+    follow a first-order lag of time constant ``tau_s`` (``PlannerConfig.torque_lag``): the
+    commands that carry stage k's forces to stage k+1's, ``(F_{k+1} − e F_k) / (1 − e)`` with
+    ``e = exp(−dt/τ)``; the last stage holds its forces."""
+    n = plan.inputs.shape[0]
+    now = plan.inputs[k]
+    if k + 1 >= n:
+        return float(now[Input.fxf]), float(now[Input.fxr])
+    nxt = plan.inputs[k + 1]
+    e = math.exp(-plan.dt_s / tau_s)
+    return ((float(nxt[Input.fxf]) - e * float(now[Input.fxf])) / (1.0 - e),
+            (float(nxt[Input.fxr]) - e * float(now[Input.fxr])) / (1.0 - e))
+
+
+def lagged_forces_n(plan: Plan, t_s: float, tau_s: float) -> tuple[float, float]:
+    """The longitudinal forces ``(F_xf, F_xr)`` [N] a plan whose forces follow the lag has at
+    ``t_s``: within stage k, ``u + (F_k − u) exp(−σ/τ)`` with the stage's commands ``u``
+    (:func:`stage_commands_n`) and ``σ`` the time since the stage's start."""
+    n = plan.inputs.shape[0]
+    tau = float(min(max((t_s - plan.t0_s) / plan.dt_s, 0.0), n - 1e-9))
+    k = int(tau)
+    decay = math.exp(-(tau - k) * plan.dt_s / tau_s)
+    u_f, u_r = stage_commands_n(plan, k, tau_s)
+    now = plan.inputs[k]
+    return (u_f + (float(now[Input.fxf]) - u_f) * decay,
+            u_r + (float(now[Input.fxr]) - u_r) * decay)
 
 
 def _dead_beat_gain(period_s: float, tau_s: float) -> float:

@@ -18,7 +18,6 @@ roll-out) with the front force it starts from; the real-time iterations
 from __future__ import annotations
 
 import logging
-import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -34,6 +33,7 @@ from mufusion.planner.config import (
     PlannerObstacle,
 )
 from mufusion.planner.minimal_risk import minimal_risk_rollout
+from mufusion.planner.ocp_state import anchored_first_forces
 from mufusion.planner.passing import in_path
 from mufusion.planner.plan import FallbackReason, Plan
 from mufusion.planner.rti import Iterated, StepProblem, iterate, plan_of
@@ -43,7 +43,6 @@ from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
     N_STATES,
-    Input,
     State,
 )
 
@@ -212,13 +211,13 @@ class TractionAdaptivePlanner:
         xs[1:, State.dpsi] = xs[1:, State.psidot] = xs[1:, State.vy] = 0.0
         return xs, np.zeros((n, N_INPUTS))
 
-    def _previous_front_force_n(self, x0: np.ndarray, t_s: float) -> float | None:
-        """The front lateral force the previous plan commands at ``t_s`` (``None``: none)."""
+    def _previous_forces_n(self, x0: np.ndarray, t_s: float) -> np.ndarray | None:
+        """The forces ``(3,)`` the previous plan has at ``t_s`` (``None``: none)."""
         prev = self._prev
         if prev is None or not np.all(np.isfinite(prev.inputs)):
             return None
         shift = self._previous_shift(x0, t_s)
-        return None if shift is None else float(prev.inputs[shift, Input.fyf])
+        return None if shift is None else np.array(prev.inputs[shift], dtype=float)
 
     # -- one planning step ----------------------------------------------------------------------
     def step(
@@ -234,6 +233,7 @@ class TractionAdaptivePlanner:
         lane_d_min_m: float | None = None,
         lane_d_max_m: float | None = None,
         front_force_n: float | None = None,
+        longitudinal_forces_n: tuple[float, float] | None = None,
     ) -> Plan:
         """Plan from ``x0`` (Frenet state, shape (6,)) at time ``t_s`` [s].
 
@@ -266,6 +266,10 @@ class TractionAdaptivePlanner:
             observer supplies it). With ``steering_rate_limit`` the plan's front-force state starts
             from it; ``None`` (or not finite: a measurement that failed degrades, never raises):
             from the force the previous plan commands now (planner/front_force.py).
+        longitudinal_forces_n
+            The front and rear longitudinal forces [N] the wheel torques deliver now. With
+            ``torque_lag`` the plan's force states start from them; ``None`` (or not finite):
+            from the previous plan's forces now (planner/ocp_state.py).
 
         Returns
         -------
@@ -292,7 +296,8 @@ class TractionAdaptivePlanner:
             cfg.lane_d_max_m if lane_d_max_m is None else lane_d_max_m,
         )
         started = time.perf_counter()
-        guess_x, guess_u, sampled = self._guess(problem, t_s, front_force_n)
+        guess_x, guess_u, sampled = self._guess(problem, t_s, front_force_n,
+                                                longitudinal_forces_n)
         # One real-time iteration per step; a cold start has no converged plan to iterate from,
         # so it takes a few (re-linearised at each iterate, as the next steps would).
         iterations = 1 if self._prev is not None else cfg.cold_start_iterations
@@ -327,7 +332,8 @@ class TractionAdaptivePlanner:
         return found
 
     def _guess(
-        self, problem: StepProblem, t_s: float, front_force_n: float | None
+        self, problem: StepProblem, t_s: float, front_force_n: float | None,
+        longitudinal_forces_n: tuple[float, float] | None = None,
     ) -> tuple[np.ndarray, np.ndarray, bool]:
         """The guess the iterations start from, and whether it is a sampled roll-out."""
         cfg, x0, mode = self.config, problem.x0, problem.mode
@@ -347,19 +353,14 @@ class TractionAdaptivePlanner:
                     problem.lane_d_max_m, self.params, cfg, self.sampling,
                     continuing=self._prev is not None,
                 )
-        if cfg.steering_rate_limit:
-            # The front force cannot jump: the plan starts from the force the tires deliver now,
-            # whatever guess (sampled roll-out, minimal-risk roll-out) it starts from
-            # (planner/front_force.py). Without a measurement, from what the previous plan
-            # commands now; that one is not what the tires deliver when the steering lags a plan
-            # that turned in hard, and the plans would carry the difference (docs/decisions/0050,
-            # "What carries the first plan").
-            applied = (float(front_force_n) if front_force_n is not None
-                       and math.isfinite(front_force_n)
-                       else self._previous_front_force_n(x0, t_s))
-            if applied is not None:
-                guess_u = guess_u.copy()
-                guess_u[0, Input.fyf] = applied
+        if not (cfg.steering_rate_limit or cfg.torque_lag):
+            return guess_x, guess_u, sampled
+        # The forces that are states cannot jump: whatever guess (sampled roll-out,
+        # minimal-risk roll-out) the step starts from, the plan starts from the forces the
+        # vehicle delivers now (planner/ocp_state.py).
+        guess_u = guess_u.copy()
+        guess_u[0] = anchored_first_forces(guess_u[0], self._previous_forces_n(x0, t_s),
+                                           front_force_n, longitudinal_forces_n, cfg)
         return guess_x, guess_u, sampled
 
     def _settle(self, solved: Iterated, mode: PlannerMode) -> tuple[np.ndarray, np.ndarray]:

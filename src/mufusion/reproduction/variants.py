@@ -165,14 +165,16 @@ PAPER_METHOD: tuple[str, ...] = (
     "probing.enabled=false", "lane_recovery.enabled=false", "planner.curve_speed_reference=false",
     "planner.brake_first=false", "planner.steering_rate_limit=false",
     "sim.torque_compensation=false", "planner.load_transfer=false",
+    "planner.torque_lag=false",
 )
 """The paper's method: a planner that tracks the cruise speed (TAMP), without our additions that
 go beyond it: friction probing and lane recovery (:mod:`mufusion.sim.supervision`), the curve-
 and friction-aware speed reference (:mod:`mufusion.planner.speed_profile`), stopping in front
 of an obstacle where possible (:mod:`mufusion.sim.obstacle_response`) and plans whose front
-force changes no faster than the steering can turn (:mod:`mufusion.planner.front_force`), and
-wheel torques commanded ahead of the brakes' lag (:class:`mufusion.planner.controller.
-ControllerGains`)."""
+force changes no faster than the steering can turn (:mod:`mufusion.planner.front_force`),
+longitudinal forces that follow the torques' lag and axle loads that follow the plan's own
+forces (:mod:`mufusion.planner.ocp_state`), and wheel torques commanded ahead of the brakes' lag
+(:class:`mufusion.planner.controller.ControllerGains`)."""
 
 TURN_SNAPSHOTS_M = (0.0, 15.0, 30.0, 55.0)
 POPUP_SNAPSHOTS_M = (0.0, 2.0, 18.0, 40.0)

@@ -90,6 +90,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         reference_regain_limit=cfg.planner.reference_regain_limit,
         steering_rate_limit=cfg.planner.steering_rate_limit,
         load_transfer=cfg.planner.load_transfer,
+        torque_lag=cfg.planner.torque_lag,
         axle_friction=cfg.planner.axle_friction,
         lane_d_min_m=lo,
         lane_d_max_m=hi,

@@ -162,6 +162,12 @@ class PlannerSettings(_Strict):
     """The friction polygons' radii follow the axle loads of each stage's own planned
     longitudinal forces (pitch load transfer inside the OCP); ``false``: the loads of the
     initial guess, as in the paper's planner."""
+    torque_lag: bool = PlannerConfig.torque_lag
+    """Plan the longitudinal forces as states that follow their commands with the wheel torques'
+    first-order lag, so that the tires, the polygons and the load transfer see the forces the
+    brakes and the drive can deliver (:mod:`mufusion.planner.ocp_state`); off by default
+    (measured on the grids, docs/decisions/0068); ``false``: free inputs, as in the paper's
+    planner."""
     axle_friction: bool = PlannerConfig.axle_friction
     """Bound each stage's front braking by the lowest μ̂ the front axle meets from the stage's
     start to where a brake torque commanded then lands, one torque lag later, where that is

@@ -50,6 +50,7 @@ class Planner(Protocol):
         lane_d_min_m: float | None = None,
         lane_d_max_m: float | None = None,
         front_force_n: float | None = None,
+        longitudinal_forces_n: tuple[float, float] | None = None,
     ) -> Plan: ...
 
     @property

@@ -202,6 +202,9 @@ class ClosedLoop:
                 xf = self.world.frenet_state(x_plant)
             if i % rates.planner_every == 0:
                 self._planning.front_force_n = None if last is None else last.front_lateral_force_n
+                radius = self.params.wheel_radius_m
+                self._planning.longitudinal_forces_n = (state.torque_front_nm / radius,
+                                                        state.torque_rear_nm / radius)
                 plan_step += 1
                 estimate, self.plan = self._planning_step(plan_step, t, xf, util_window)
                 util_window = 0.0

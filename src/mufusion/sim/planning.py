@@ -70,6 +70,9 @@ class Planning:
         self.front_force_n: float | None = None
         """The front axle's body-frame lateral force of the last plant step: each plan's force
         state starts from it (None before the first step: the warm-up plans start from theirs)."""
+        self.longitudinal_forces_n: tuple[float, float] | None = None
+        """The front and rear longitudinal forces the wheel torques deliver now: each plan's
+        longitudinal force states start from them (planner/ocp_state.py)."""
 
     def context(
         self, t_s: float, xf: np.ndarray, obstacles: Sequence[PlannerObstacle], minimal_risk: bool
@@ -144,4 +147,5 @@ class Planning:
             lane_d_min_m=self.lane_bounds_m[0],
             lane_d_max_m=self.lane_bounds_m[1],
             front_force_n=self.front_force_n,
+            longitudinal_forces_n=self.longitudinal_forces_n,
         )
