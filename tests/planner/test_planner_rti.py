@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mufusion.planner.controller import stage_commands_n
 from mufusion.planner.ocp import PlannerConfig, polygon_directions
 from mufusion.planner.planner import FallbackReason, Plan, TractionAdaptivePlanner
 from mufusion.vehicle.params import TRUCK
@@ -159,7 +160,9 @@ def test_emergency_stop_in_front_of_an_obstacle_beside_the_lane_centre():
         plan = planner.step(x, 0.1 * k, flat, grip, [obstacle], "emergency", 14.0,
                             lane_d_min_m=-0.35, lane_d_max_m=3.85)
         assert plan.ok, plan.fallback_reason
-        decel = -(plan.inputs[0, Input.fxf] + plan.inputs[0, Input.fxr]) / TRUCK.mass_kg
+        # The forces follow the torques' lag (decision 0068): the first stage's commands brake.
+        commands = stage_commands_n(plan, 0, TRUCK.torque_time_constant_s)
+        decel = -sum(commands) / TRUCK.mass_kg
         assert decel > 0.5 * 9.81  # braking hard from the first plan on
         assert np.abs(plan.states[:, 1]).max() < 0.1  # in lane: no swerve towards the gap
         x = plan.states[1]

@@ -92,7 +92,7 @@ def test_a_solver_with_the_envelope_keeps_the_plans_yaw_rate_inside() -> None:
         # Stages 1 … N-1: the terminal stage bounds d only.
         bounded.append(float(np.max(np.abs(xs[1:n, State.psidot]))))
     free, enveloped = bounded
-    assert free > 1.3 * bound
+    assert free > 1.2 * bound  # the case needs the bound
     assert enveloped < 1.05 * bound
 
 

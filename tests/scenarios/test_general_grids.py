@@ -159,31 +159,15 @@ def test_gt_keeps_its_lane_in_feasible_general_turns(drawn) -> None:
 
 # Mechanism B (decision 0061): the truck at 19 m/s onto a 40 m arc after a rise 0.3 → 0.9; its
 # plans exceed |ψ̇| ≤ μ̂ g / v and the body slip reached 0.18-0.20 rad, 0.33-0.39 m out; with
-# the rear tire at the plan's own load and the curvature under the axles (decision 0066) the
-# rear corner still crosses the edge by 2.1 cm in its power-on exit. Strict: this fails once a
-# fix keeps the lane, until the marker goes.
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="issue 38 mechanism B: 2.1 cm left (decision 0066)")
+# the rear tire at the plan's own load and the curvature under the axles (decision 0066) 2.1 cm,
+# the plans alternating braking and driving stage by stage; with the longitudinal forces as
+# OCP states that follow the torques' lag (decision 0068) in lane.
 @pytest.mark.slow
 def test_gt_keeps_its_lane_on_the_rise_onto_a_40_m_arc_at_19_mps() -> None:
     drawn = (*_campaign(TURN_GRID).overrides, "vehicle=truck", "turn.radius_m=40.0",
              "turn.angle_rad=1.5708", "initial_speed_mps=19.0", "duration_s=10.0",
              "friction.change_ahead_m=10.0", "friction.mu_before=0.3", "friction.mu_turn=0.9",
              "turn.direction=left")
-    verdict, m = _gt_turn(drawn)
-    assert verdict.feasibility_class is FeasibilityClass.FEASIBLE
-    assert not m.left_lane, f"GT left its lane by {m.max_lane_excursion_m:.2f} m"
-
-
-# Decision 0068: the same run with the longitudinal forces as OCP states that follow the torques'
-# lag (not the default: it enters other curves faster) keeps the lane; the free forces
-# alternated braking and driving from stage to stage.
-@pytest.mark.slow
-def test_gt_keeps_its_lane_on_that_rise_with_the_torque_lag_in_the_plans() -> None:
-    drawn = (*_campaign(TURN_GRID).overrides, "vehicle=truck", "turn.radius_m=40.0",
-             "turn.angle_rad=1.5708", "initial_speed_mps=19.0", "duration_s=10.0",
-             "friction.change_ahead_m=10.0", "friction.mu_before=0.3", "friction.mu_turn=0.9",
-             "turn.direction=left", "planner.torque_lag=true")
     verdict, m = _gt_turn(drawn)
     assert verdict.feasibility_class is FeasibilityClass.FEASIBLE
     assert not m.left_lane, f"GT left its lane by {m.max_lane_excursion_m:.2f} m"

@@ -164,9 +164,10 @@ class PlannerConfig:
     # (pitch load transfer inside the OCP) instead of the guess's (beyond the paper).
     load_transfer: bool = True
     # Plan the longitudinal forces as states that follow their commands with the wheel torques'
-    # first-order lag (planner/ocp_state.py; beyond the paper). Off: measured on the grids, it
-    # keeps issue 38's mechanism B in lane but enters some curves faster (docs/decisions/0068).
-    torque_lag: bool = False
+    # first-order lag (planner/ocp_state.py; beyond the paper; docs/decisions/0068). The speed
+    # reference then leads by one more torque lag: plans that know the brakes build up over τ
+    # reach its ramps τ later.
+    torque_lag: bool = True
     # Each stage's front braking also bounded by the lowest μ̂ under the front axle from the
     # stage's start to one torque lag later, where it is below the stage's (docs/decisions/0064).
     axle_friction: bool = True

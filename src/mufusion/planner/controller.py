@@ -43,7 +43,10 @@ class ControllerGains:
     ramp τ behind). Feedback, given the measured torques: their shortfall against the plan of now
     (a new plan's first stage, which no feed-forward could anticipate), removed within one
     controller period (dead-beat for the lag: gain ``e/(1 − e)``, ``e = exp(−h/τ)``).
-    ``False``: the forces planned for now, as in the paper's controller."""
+    ``False``: the forces planned for now, as in the paper's controller. With
+    ``PlannerConfig.torque_lag`` the plan's forces already follow the lag: the stage's commands
+    are sent either way, and the feedback (``True``) is onto the plan's forces one controller
+    period ahead."""
 
 
 def _magic_formula_lateral(alpha: np.ndarray, fz: float, mu: float, tire: TireParams):
@@ -193,10 +196,10 @@ class TrackingController:
         r = par.wheel_radius_m
         measured = (g.torque_compensation and torques_now_nm is not None
                     and all(map(math.isfinite, torques_now_nm)))
-        if g.torque_compensation and self.config is not None and self.config.torque_lag:
-            # The plan's forces follow the lag already (planner/ocp_state.py): the torques go
-            # where the plan has them one controller period ahead, exactly (dead-beat), or, with
-            # no measurement, the plan's own commands of the stage.
+        if self.config is not None and self.config.torque_lag:
+            # The plan's forces follow the lag already (planner/ocp_state.py): its commands of
+            # the stage are the torques to send; with the compensation and a measurement, the
+            # torques go where the plan has them one controller period ahead (dead-beat).
             period = 1.0 / g.rate_hz
             if measured:
                 assert torques_now_nm is not None

@@ -107,8 +107,11 @@ def iterate(
             # it and one torque lag further.
             # The same span bounds the curvature: the curve's speed is reached before the front
             # axle, and a brake torque commanded for it, enter the curve (docs/decisions/0066).
+            # Plans whose forces follow the torques' lag reach the reference's ramps one lag
+            # later still, so it leads by one more (docs/decisions/0068).
+            lags = 2.0 if cfg.torque_lag else 1.0
             ahead_m = (par.cog_to_front_axle_m
-                       + max(float(x0[State.vx]), 0.0) * par.torque_time_constant_s)
+                       + lags * max(float(x0[State.vx]), 0.0) * par.torque_time_constant_s)
             mu_ref = lowest_under_axles(mu_of_s, par.cog_to_rear_axle_m, ahead_m)
             kappa_ref = sharpest_under_axles(curvature_of_s, par.cog_to_rear_axle_m, ahead_m)
             speed_ref = curve_speed_reference_mps(

@@ -165,9 +165,9 @@ class PlannerSettings(_Strict):
     torque_lag: bool = PlannerConfig.torque_lag
     """Plan the longitudinal forces as states that follow their commands with the wheel torques'
     first-order lag, so that the tires, the polygons and the load transfer see the forces the
-    brakes and the drive can deliver (:mod:`mufusion.planner.ocp_state`); off by default
-    (measured on the grids, docs/decisions/0068); ``false``: free inputs, as in the paper's
-    planner."""
+    brakes and the drive can deliver, and the speed reference leads by one more torque lag
+    (:mod:`mufusion.planner.ocp_state`, docs/decisions/0068); ``false``: free inputs, as in the
+    paper's planner."""
     axle_friction: bool = PlannerConfig.axle_friction
     """Bound each stage's front braking by the lowest μ̂ the front axle meets from the stage's
     start to where a brake torque commanded then lands, one torque lag later, where that is
