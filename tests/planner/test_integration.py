@@ -59,3 +59,26 @@ def test_the_steps_follow_the_fastest_mode():
     assert rk4_steps_per_stage(TRUCK, 0.1, 0.9, 1.5) < steps
     with pytest.raises(ValueError, match="dt_s must be > 0"):
         rk4_steps_per_stage(CAR, 0.0, 0.9, 1.5)
+
+
+def test_the_torque_lag_state_gets_the_steps_its_own_mode_needs():
+    # A first-order lag of τ is the mode −1/τ: one RK4 step of 0.1 s is unstable for τ below
+    # 0.1 / 2.785 s. The package's vehicles are far from it (car 0.05 s, truck 0.15 s), so their
+    # steps stay those of the lateral–yaw mode; a vehicle with 5 ms torques needs 8 per stage.
+    from dataclasses import replace
+
+    from mufusion.planner.integration import stage_steps
+
+    lagged, free = PlannerConfig(torque_lag=True), PlannerConfig(torque_lag=False)
+    for params in (CAR, TRUCK):
+        assert stage_steps(lagged, params) == stage_steps(free, params)
+    fast = replace(TRUCK, torque_time_constant_s=0.005)
+    assert stage_steps(free, fast) == stage_steps(free, TRUCK)
+    steps = stage_steps(lagged, fast)
+    assert steps == 8
+    # The lag over a stage, as the steps integrate it: decays (not amplified) with them, and
+    # amplified with one step.
+    def decay(n: int) -> float:
+        z = -lagged.dt_s / n / fast.torque_time_constant_s
+        return abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) ** n
+    assert decay(steps) < 1.0 < decay(1)

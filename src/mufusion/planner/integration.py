@@ -78,6 +78,13 @@ def rk4_steps_per_stage(
 
 
 def stage_steps(config: PlannerConfig, params: VehicleParams) -> int:
-    """:func:`rk4_steps_per_stage` for a planner configuration and vehicle."""
-    return rk4_steps_per_stage(params, config.dt_s, config.utilization_factor,
-                               config.max_cruise_accel_mps2)
+    """:func:`rk4_steps_per_stage` for a planner configuration and vehicle; with
+    ``config.torque_lag`` at least enough for the lag's own mode ``−1/τ``
+    (planner/ocp_state.py): a vehicle whose torques settle much faster than a stage would make
+    that state unstable too."""
+    steps = rk4_steps_per_stage(params, config.dt_s, config.utilization_factor,
+                                config.max_cruise_accel_mps2)
+    if config.torque_lag:
+        lag_steps = math.ceil(config.dt_s / (params.torque_time_constant_s * RK4_STABILITY_LIMIT))
+        steps = max(steps, lag_steps)
+    return steps
