@@ -18,6 +18,7 @@ from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.planner_model import State
 from mufusion.vehicle.plant import Plant, initial_state
+from mufusion.vehicle.plant_state import PlantState
 
 N = 8
 
@@ -149,6 +150,15 @@ def test_each_plan_is_given_the_front_force_the_tires_deliver() -> None:
     expected = [outputs[round(k * per_plan) - 1].front_lateral_force_n for k in range(1, 11)]
     assert given[4:] == expected
     assert min(abs(f) for f in expected[2:]) > 1e3  # the truck is steered: a real force
+    # The longitudinal force states start from the wheel torques the same step leaves, over the
+    # wheel radius (docs/decisions/0068).
+    radius = TRUCK.wheel_radius_m
+    longitudinal = [c["longitudinal_forces_n"] for c in planner.calls]
+    assert longitudinal[:4] == [None] * 3 + [(0.0, 0.0)]  # the warm-up plans; at rest
+    assert longitudinal[4:] == [
+        (outputs[round(k * per_plan) - 1].x[PlantState.TORQUE_FRONT] / radius,
+         outputs[round(k * per_plan) - 1].x[PlantState.TORQUE_REAR] / radius)
+        for k in range(1, 11)]
 
 
 def test_collision_stops_the_run_and_is_measured() -> None:
