@@ -12,6 +12,7 @@ from mufusion.fusion import (
     FusionData,
     assemble_inputs,
     assemble_inputs_batch,
+    declared_central_value,
     declared_upper_bound,
     local_surface_bound,
 )
@@ -223,3 +224,17 @@ def test_declared_upper_bound_is_the_lowest_y_plus_m_at_each_point() -> None:
     np.testing.assert_allclose(declared_upper_bound(two, np.array([0.0, 1.0, 2.0])),
                                [0.4, 0.95, 0.95])
     assert np.isinf(declared_upper_bound(two, np.array([-1.0, 3.0]))).all()
+
+
+def test_declared_central_value_is_the_lowest_y_at_each_point() -> None:
+    mu, margin = _classes(30.0)
+    d = assemble_inputs(GRID, mu, margin, local_mu=0.925, mode="safe")
+    value = declared_central_value(d, GRID)
+    np.testing.assert_allclose(value[GRID < 5.0], 0.925)  # the local estimate's points
+    np.testing.assert_allclose(value[(GRID >= 5.0) & (GRID < 30.0)], 0.8)
+    np.testing.assert_allclose(value[GRID >= 30.0], 0.5)
+    assert np.all(value <= declared_upper_bound(d, GRID))
+    two = FusionData([0.0, 0.0, 2.0], [0.5, 0.3, 0.9], [0.1, 0.1, 0.05])
+    np.testing.assert_allclose(declared_central_value(two, np.array([0.0, 1.0, 2.0])),
+                               [0.3, 0.9, 0.9])
+    assert np.isinf(declared_central_value(two, np.array([-1.0, 3.0]))).all()

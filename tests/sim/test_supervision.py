@@ -120,19 +120,21 @@ def test_relaxation_never_trusts_the_local_estimate_beyond_its_declared_error() 
     data = assemble_inputs(GRID, camera_mu, camera_margin, local_mu=0.925, mode="safe")
     mean = np.where(GRID < 30.0, 0.92, 0.7)
     post = FusedEstimate(GRID, mean, np.full(51, 0.02), np.full(51, 0.6), np.full(51, 0.6))
-    est = FrictionEstimate(GRID, np.full(51, 0.6), True, 0.925, fused=post, data=data)
+    mu_hat = np.where(GRID < 30.0, 0.6, 0.4)  # the classes' lower bounds
+    est = FrictionEstimate(GRID, mu_hat, True, 0.925, fused=post, data=data)
     full = relaxed_estimate(est, 1.0)
     assert full is not None
     # Capped: the mean's 0.92 would over-estimate.
     np.testing.assert_allclose(full.mu_hat[GRID < 30.0], 0.9)
-    # Another surface: the mean (0.7), but not above what its class declares possible (0.5 + 0.1).
-    np.testing.assert_allclose(full.mu_hat[GRID >= 30.0], 0.6)
+    # Another surface: the mean (0.7), but not above the value its class reports (0.5), the
+    # most probable μ there; the class's upper edge (0.6) would over-estimate a surface at 0.55.
+    np.testing.assert_allclose(full.mu_hat[GRID >= 30.0], 0.5)
     np.testing.assert_allclose(relaxed_estimate(est, 0.5).mu_hat[GRID < 30.0], 0.75)
-    # Without the local estimate the mean is the target within the classes' declared bounds.
-    unmeasured = FrictionEstimate(GRID, np.full(51, 0.6), False, None, fused=post,
+    # Without the local estimate the mean is the target up to the classes' reported values.
+    unmeasured = FrictionEstimate(GRID, mu_hat, False, None, fused=post,
                                   data=assemble_inputs(GRID, camera_mu, camera_margin,
                                                        mode="safe"))
-    declared = np.where(GRID < 30.0, 1.0, 0.6)
+    declared = np.where(GRID < 30.0, 0.8, 0.5)
     np.testing.assert_allclose(relaxed_estimate(unmeasured, 1.0).mu_hat, np.minimum(mean, declared))
     with pytest.raises(ValueError, match=r"probing\.max_decel_mps2"):
         ProbingSettings(max_decel_mps2=9.0)
@@ -498,7 +500,8 @@ def test_relaxation_never_plans_above_the_class_the_camera_reports_ahead() -> No
     # The general grid's drop inside a curve (docs/decisions/0061): the local estimate 0.925 ±
     # 0.025 on μ 0.9, the camera's class 0.25 ± 0.15 from 16 m on. The posterior mean stays at
     # 0.9 over the low class; relaxing towards it planned the drop at up to 0.9 where every
-    # estimate there says μ ≤ 0.4.
+    # estimate there says μ ≤ 0.4, and relaxing to that edge still planned a surface of 0.3 above
+    # its friction (docs/decisions/0069): the target there is the class's own value, 0.25.
     camera_mu = np.where(GRID < 16.0, 0.8, 0.25)
     camera_margin = np.where(GRID < 16.0, 0.2, 0.15)
     data = assemble_inputs(GRID, camera_mu, camera_margin, local_mu=0.925, mode="safe")
@@ -509,8 +512,8 @@ def test_relaxation_never_plans_above_the_class_the_camera_reports_ahead() -> No
     full = relaxed_estimate(est, 1.0)
     assert full is not None
     np.testing.assert_allclose(full.mu_hat[GRID < 16.0], 0.9)
-    np.testing.assert_allclose(full.mu_hat[GRID >= 16.0], 0.4)
-    np.testing.assert_allclose(relaxed_estimate(est, 0.5).mu_hat[GRID >= 16.0], 0.25)
+    np.testing.assert_allclose(full.mu_hat[GRID >= 16.0], 0.25)
+    np.testing.assert_allclose(relaxed_estimate(est, 0.5).mu_hat[GRID >= 16.0], 0.175)
 
 
 @pytest.mark.slow

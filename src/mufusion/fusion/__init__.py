@@ -29,6 +29,7 @@ from mufusion.fusion.assembly import (
     FusionDataBatch,
     assemble_inputs,
     assemble_inputs_batch,
+    declared_central_value,
     declared_upper_bound,
     local_surface_bound,
 )
@@ -90,6 +91,7 @@ __all__ = [
     "SharedSettings",
     "assemble_inputs",
     "assemble_inputs_batch",
+    "declared_central_value",
     "declared_upper_bound",
     "fuse",
     "fuse_batch",

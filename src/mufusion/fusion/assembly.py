@@ -321,15 +321,37 @@ def declared_upper_bound(data: FusionData, s_eval_m: np.ndarray) -> np.ndarray:
     >>> declared_upper_bound(d, np.array([0.0, 0.5, 2.0, 3.0])).round(3).tolist()
     [0.925, 0.925, 0.4, inf]
     """
+    return _lowest_declared(data.s_m, data.mu + data.margin, s_eval_m)
+
+
+def declared_central_value(data: FusionData, s_eval_m: np.ndarray) -> np.ndarray:
+    """The estimates' own values ``y`` (their most probable μ), at ``s_eval_m`` [-].
+
+    :func:`declared_upper_bound` with ``y`` for ``y + m``: the lowest value at a position,
+    the larger neighbour's strictly between two, ``+inf`` outside the data. What a departure from
+    the guaranteed μ̂ may assume ahead of the surface the local estimate measured: every
+    estimate there says the friction is most probably no higher (docs/decisions/0069).
+
+    Examples
+    --------
+    >>> d = FusionData([0.0, 1.0, 2.0], [0.9, 0.25, 0.25], [0.025, 0.15, 0.15])
+    >>> declared_central_value(d, np.array([0.0, 0.5, 2.0, 3.0])).round(3).tolist()
+    [0.9, 0.9, 0.25, inf]
+    """
+    return _lowest_declared(data.s_m, data.mu, s_eval_m)
+
+
+def _lowest_declared(s_m: np.ndarray, value: np.ndarray, s_eval_m: np.ndarray) -> np.ndarray:
+    """Per position the lowest ``value``, between positions the larger neighbour's, outside
+    ``+inf`` (the envelope of :func:`declared_upper_bound`)."""
     s_eval = np.asarray(s_eval_m, dtype=float)
-    if data.s_m.size == 0:
+    if s_m.size == 0:
         return np.full(s_eval.shape, np.inf)
-    hi = data.mu + data.margin
-    order = np.lexsort((hi, data.s_m))  # by s, then the lowest bound first
-    s_sorted, hi_sorted = data.s_m[order], hi[order]
+    order = np.lexsort((value, s_m))  # by s, then the lowest value first
+    s_sorted, v_sorted = s_m[order], value[order]
     first = np.ones(s_sorted.size, dtype=bool)
     first[1:] = np.diff(s_sorted) > SAME_S_TOL_M
-    us, ub = s_sorted[first], hi_sorted[first]
+    us, ub = s_sorted[first], v_sorted[first]
     left, right, at_left, at_right, outside = envelope_index(us, s_eval)
     bound = np.maximum(ub[left], ub[right])
     bound = np.where(at_right, ub[right], bound)

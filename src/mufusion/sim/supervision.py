@@ -86,7 +86,7 @@ from enum import StrEnum
 import numpy as np
 
 from mufusion.configurations import MU_HAT_MAX, FrictionEstimate
-from mufusion.fusion import Z95, declared_upper_bound, local_surface_bound
+from mufusion.fusion import Z95, declared_central_value, declared_upper_bound, local_surface_bound
 
 # The plan's geometric checks and the settings live apart; importers of this module keep them.
 from mufusion.sim.plan_checks import planned_footprint_violation_m as planned_footprint_violation_m
@@ -102,12 +102,15 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     a posterior or when the mean adds nothing.
 
     The target is the mean capped, where the data hold a local estimate, by what it guarantees
-    on the surface it measured (:func:`mufusion.fusion.local_surface_bound`), and everywhere by
-    the highest friction the estimates' declared errors allow
-    (:func:`mufusion.fusion.declared_upper_bound`, ``y + m``): the posterior mean can lie far
-    above a class the camera reports ahead (0.9 over a class of 0.25 ± 0.15 once the local
-    estimate on 0.9 anchors it), and plans relaxed to it reached a drop too fast
-    (docs/decisions/0061). Without data the target is the mean.
+    on the surface it measured (:func:`mufusion.fusion.local_surface_bound`), beyond that surface
+    by the value the estimates there report, their most probable μ
+    (:func:`mufusion.fusion.declared_central_value`, ``y``), and everywhere by the highest
+    friction their declared errors allow (:func:`mufusion.fusion.declared_upper_bound`,
+    ``y + m``). The posterior mean can lie far above a class the camera reports ahead (0.9 over a
+    class of 0.25 ± 0.15 once the local estimate on 0.9 anchors it): plans relaxed to it reached
+    a drop too fast (docs/decisions/0061), and relaxed to the class's upper edge (0.4 over a
+    surface of 0.3) they still planned the arc above its friction (docs/decisions/0069).
+    Without data the target is the mean.
 
     Examples
     --------
@@ -130,7 +133,12 @@ def relaxation_gain(estimate: FrictionEstimate) -> np.ndarray | None:
     mu_hat = np.asarray(estimate.mu_hat, dtype=float)
     target = np.asarray(estimate.fused.mean, dtype=float)
     if estimate.data is not None:
-        target = np.minimum(np.minimum(target, local_surface_bound(estimate.data, estimate.s_m)),
+        # On the surface the local estimate measured, what it guarantees; beyond it, what the
+        # estimates there say is most probable (docs/decisions/0069).
+        local = local_surface_bound(estimate.data, estimate.s_m)
+        ahead = np.where(np.isinf(local), declared_central_value(estimate.data, estimate.s_m),
+                         local)
+        target = np.minimum(np.minimum(target, ahead),
                             declared_upper_bound(estimate.data, estimate.s_m))
     gain = np.maximum(target - mu_hat, 0.0)
     if not np.any(gain > 1e-9):
