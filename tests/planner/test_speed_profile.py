@@ -298,3 +298,39 @@ def test_the_cruise_reference_regains_speed_from_the_vehicle_in_a_curve() -> Non
     assert refs[True][0] == pytest.approx(12.0)
     assert refs[True][5] < math.sqrt(12.0**2 + 2 * 1.5 * 5 * 0.1 * 12.0)
     assert np.all(np.diff(refs[True][:20]) >= -1e-12)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    steps=st.lists(st.floats(0.1, 3.0), min_size=1, max_size=120),
+    data=st.data(),
+    start=st.floats(0.0, 30.0),
+    braking_fraction=st.floats(0.05, 1.0),
+)
+def test_the_compiled_passes_equal_the_python_loops_bit_for_bit(
+    steps, data, start, braking_fraction
+):
+    # The compiled passes (where the install built them) replace the Python loops at every
+    # planning step: the same IEEE operations in the same order, NaN and ties included.
+    import mufusion.planner.speed_profile as sp
+
+    if sp._COMPILED is None:
+        pytest.fail("this install lacks the compiled speed-profile passes (pip install -e .)")
+    n = len(steps)
+    s = np.cumsum(steps)
+    kappa = np.array(data.draw(st.lists(st.sampled_from([0.0, 1 / 25, -1 / 60, np.nan]),
+                                        min_size=n, max_size=n)))
+    mu = np.array(data.draw(st.lists(st.one_of(st.floats(0.05, 1.2), st.just(np.nan)),
+                                     min_size=n, max_size=n)))
+
+    def both():
+        with np.errstate(divide="ignore", invalid="ignore"):
+            profile = max_speed_profile_mps(s, kappa, mu, 0.9, 20.0, braking_fraction)
+            return profile, regain_limited_profile_mps(s, kappa, mu, 0.9, profile, start, 1.5)
+
+    compiled = both()
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(sp, "_COMPILED", None)
+        python = both()
+    for got, expected in zip(compiled, python, strict=True):
+        np.testing.assert_array_equal(got, expected)

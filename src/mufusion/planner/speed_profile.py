@@ -20,10 +20,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from types import ModuleType
 
 import numpy as np
 
 from mufusion.vehicle.params import GRAVITY_MPS2
+
+_COMPILED: ModuleType | None
+try:  # the passes compiled (bit for bit the loops below), where the install built them
+    import mufusion.planner._speed_profile_c as _COMPILED
+except ImportError:  # pragma: no cover - a tree without the compiled modules
+    _COMPILED = None
 
 PROFILE_STEP_M = 1.0
 """Grid step of the profile [m]; each step brakes with its larger curvature (errs slow)."""
@@ -91,10 +98,15 @@ def max_speed_profile_mps(
     accel = accel_fraction * mu_arr * GRAVITY_MPS2
     with np.errstate(divide="ignore"):
         limit = np.where(kappa > 0.0, accel / np.maximum(kappa, 1e-300), np.inf)
-    # The backward pass is sequential; on Python floats it runs ~4x faster than on numpy
-    # scalars, with the same IEEE operations in the same order and ``min``/``max``'s
-    # argument semantics (identical results, NaN included).
-    u = np.minimum(limit, end_speed_mps**2).tolist()
+    # The backward pass is sequential: compiled where built, else on Python floats (~4x faster
+    # than on numpy scalars); either way the same IEEE operations in the same order and
+    # ``min``/``max``'s argument semantics (identical results, NaN included).
+    u_arr = np.minimum(limit, end_speed_mps**2)
+    if _COMPILED is not None:
+        _COMPILED.backward_pass(u_arr, kappa, accel, np.ascontiguousarray(s),
+                                2.0 * braking_fraction)
+        return np.sqrt(u_arr)
+    u = u_arr.tolist()
     k_list, a_list, s_list = kappa.tolist(), accel.tolist(), s.tolist()
     u_next, k_next, s_next = u[-1], k_list[-1], s_list[-1]
     two_b = 2.0 * braking_fraction
@@ -161,16 +173,25 @@ def regain_limited_profile_mps(
     if not start_speed_mps >= 0.0 or not max_accel_mps2 > 0.0:
         raise ValueError("start_speed_mps must be >= 0 and max_accel_mps2 > 0, got "
                          f"{start_speed_mps!r} and {max_accel_mps2!r}")
-    kappa = np.abs(np.asarray(curvature_1pm, dtype=float)).tolist()
-    accel = (accel_fraction * np.asarray(mu, dtype=float) * GRAVITY_MPS2).tolist()
-    s_list = np.asarray(s_m, dtype=float).tolist()
-    cap = (np.asarray(profile_mps, dtype=float) ** 2).tolist()
+    kappa_arr = np.abs(np.asarray(curvature_1pm, dtype=float))
+    accel_arr = accel_fraction * np.asarray(mu, dtype=float) * GRAVITY_MPS2
+    s_arr = np.ascontiguousarray(s_m, dtype=float)
+    cap_arr = np.asarray(profile_mps, dtype=float) ** 2
+    cap = cap_arr.tolist()
     w = min(start_speed_mps * start_speed_mps, cap[0])
     # Where the profile ahead falls below the vehicle's speed, the way to its lowest point is a
     # deceleration: speed regained on it would only have to be braked away again, later and
     # closer to the curve (docs/decisions/0044, "No speed regained on the way to a curve").
     lowest = min(cap)
     bottom = cap.index(lowest) if lowest < w else 0
+    # The compiled pass where the friction is positive (or NaN): the loop below divides by it
+    # and raises on zero, and takes a square root that is undefined for a negative one.
+    if _COMPILED is not None and not np.any(accel_arr <= 0.0):
+        out_arr = np.empty(cap_arr.size)
+        _COMPILED.forward_pass(out_arr, cap_arr, kappa_arr, accel_arr, s_arr, w, bottom,
+                               float(max_accel_mps2))
+        return np.sqrt(out_arr)
+    kappa, accel, s_list = kappa_arr.tolist(), accel_arr.tolist(), s_arr.tolist()
     out = [w]
     for i in range(len(cap) - 1):
         if i < bottom:

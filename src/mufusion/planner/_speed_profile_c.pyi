@@ -1,0 +1,15 @@
+import numpy as np
+
+def backward_pass(
+    u: np.ndarray, kappa: np.ndarray, accel: np.ndarray, s: np.ndarray, two_b: float
+) -> None: ...
+def forward_pass(
+    out: np.ndarray,
+    cap: np.ndarray,
+    kappa: np.ndarray,
+    accel: np.ndarray,
+    s: np.ndarray,
+    w: float,
+    bottom: int,
+    max_accel: float,
+) -> None: ...

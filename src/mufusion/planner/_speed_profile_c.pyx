@@ -1,0 +1,63 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
+"""Compiled passes of :mod:`mufusion.planner.speed_profile` (same values, bit for bit).
+
+The backward and forward passes over the profile's grid are sequential loops of a few scalar
+operations per metre; in Python each costs the interpreter's dispatch. Here they run in C on the
+same IEEE operations in the same order (``sqrt`` is correctly rounded in both), with Python's
+``min``/``max`` argument rule: ``max(a, b)`` is ``b`` only if ``b > a`` and ``min(a, b)`` is
+``b`` only if ``b < a`` (so a NaN in the first argument propagates, as there). The build turns
+off floating-point contraction (no fused multiply-adds). A zero friction, which the Python
+forward pass divides by with a ``ZeroDivisionError``, is refused here by the caller's checks
+(the profile's friction is floored at 0.05 before it gets here).
+"""
+
+from libc.math cimport sqrt
+
+
+cdef inline double pmax(double a, double b) noexcept nogil:
+    return b if b > a else a
+
+
+cdef inline double pmin(double a, double b) noexcept nogil:
+    return b if b < a else a
+
+
+def backward_pass(double[::1] u, const double[::1] kappa, const double[::1] accel,
+                  const double[::1] s, double two_b):
+    """In place on ``u`` (squared speeds, already capped by the curvature and the end speed):
+    each point lowered to what braking with ``two_b / 2`` of the friction left after the
+    larger curvature's lateral demand reaches from the next point."""
+    cdef Py_ssize_t n = u.shape[0], i
+    cdef double u_next, k_next, s_next, k_i, s_i, a, lateral, braking, reachable
+    if n == 0:
+        return
+    u_next, k_next, s_next = u[n - 1], kappa[n - 1], s[n - 1]
+    with nogil:
+        for i in range(n - 2, -1, -1):
+            k_i, s_i, a = kappa[i], s[i], accel[i]
+            lateral = u_next * (k_next if k_next > k_i else k_i)
+            braking = sqrt(pmax(a * a - lateral * lateral, 0.0))
+            reachable = u_next + two_b * braking * (s_next - s_i)
+            u_next = reachable if reachable < u[i] else u[i]
+            u[i] = u_next
+            k_next, s_next = k_i, s_i
+
+
+def forward_pass(double[::1] out, const double[::1] cap, const double[::1] kappa,
+                 const double[::1] accel, const double[::1] s, double w, Py_ssize_t bottom,
+                 double max_accel):
+    """Writes the regained squared speeds into ``out`` (``out[0] = w``): held below ``cap``
+    up to ``bottom``, then rising with the drive's cap on the g-g ellipse."""
+    cdef Py_ssize_t n = cap.shape[0], i
+    cdef double lateral, ratio
+    out[0] = w
+    with nogil:
+        for i in range(n - 1):
+            if i < bottom:
+                w = pmin(cap[i + 1], w)
+            else:
+                lateral = w * pmax(kappa[i], kappa[i + 1])
+                ratio = pmin(lateral / accel[i], 1.0)
+                w = pmin(cap[i + 1], w + 2.0 * max_accel * sqrt(1.0 - ratio * ratio)
+                         * (s[i + 1] - s[i]))
+            out[i + 1] = w
