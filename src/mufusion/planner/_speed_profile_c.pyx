@@ -6,9 +6,9 @@ operations per metre; in Python each costs the interpreter's dispatch. Here they
 same IEEE operations in the same order (``sqrt`` is correctly rounded in both), with Python's
 ``min``/``max`` argument rule: ``max(a, b)`` is ``b`` only if ``b > a`` and ``min(a, b)`` is
 ``b`` only if ``b < a`` (so a NaN in the first argument propagates, as there). The build turns
-off floating-point contraction (no fused multiply-adds). A zero friction, which the Python
-forward pass divides by with a ``ZeroDivisionError``, is refused here by the caller's checks
-(the profile's friction is floored at 0.05 before it gets here).
+off floating-point contraction (no fused multiply-adds). The forward pass divides by the
+friction: a zero or negative one, on which the Python loop raises, never reaches it (the
+caller keeps the Python loop for those).
 """
 
 from libc.math cimport sqrt
