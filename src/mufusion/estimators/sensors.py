@@ -41,7 +41,8 @@ class Channel(str, Enum):
     CAMERA_MU = "camera_mu"
     """The camera's μ report at each distance ahead (the class value, with its error model)."""
     TRUTH = "truth"
-    """The true friction ahead: ground truth, not a sensor (GT only)."""
+    """The true friction ahead: ground truth, not a sensor (GT only). In the closed loop it
+    reaches as far as the planner looks, not just the camera's range (docs/decisions/0071)."""
 
 
 SENSOR_CHANNELS: frozenset[Channel] = frozenset(set(Channel) - {Channel.TRUTH})

@@ -9,11 +9,48 @@ from collections.abc import Callable
 import numpy as np
 
 from mufusion.configurations import FrictionEstimate, FrictionSource, channels_of, step_source
-from mufusion.estimators import SensorModel, VehicleSignals
+from mufusion.estimators import Channel, SensorModel, VehicleSignals
 from mufusion.sim.sensing import vehicle_signals
 from mufusion.sim.world import World
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.plant import PlantOutput
+
+
+def source_grid_m(
+    estimate_grid_m: np.ndarray, friction: FrictionSource, truth_reach_m: float
+) -> np.ndarray:
+    """The distances ahead at which ``friction`` is handed its inputs and gives μ̂ [m].
+
+    The sensors' grid ``estimate_grid_m`` (the paper's 0, 1, …, 50 m: the camera's range), or,
+    for a source that reads the truth (:attr:`~mufusion.estimators.Channel.TRUTH`, GT), that
+    grid continued at its own spacing to ``truth_reach_m``: the paper's GT plans with
+    ``μ̂(s) = μ_gt(s)`` over the whole horizon, not up to a camera's range. Held at 50 m, GT
+    was blind to a drop the planner's reach already covered: a truck at 23 m/s that needs 49 m
+    to brake for a drop 55 m ahead spun 13 m off its lane (docs/decisions/0071).
+
+    Raises
+    ------
+    ValueError
+        If ``truth_reach_m`` is not finite or ends before the sensors' grid does.
+
+    Examples
+    --------
+    >>> from mufusion.configurations import make_estimator
+    >>> grid = np.arange(0.0, 51.0)
+    >>> source_grid_m(grid, make_estimator("GT"), 300.0)[[0, 50, 51, -1]].tolist()
+    [0.0, 50.0, 51.0, 300.0]
+    >>> source_grid_m(grid, make_estimator("L"), 300.0) is grid
+    True
+    """
+    grid = np.asarray(estimate_grid_m, dtype=float)
+    if not (np.isfinite(truth_reach_m) and truth_reach_m >= grid[-1]):
+        raise ValueError(f"truth_reach_m must be finite and at least the estimate grid's end "
+                         f"({grid[-1]:g} m), got {truth_reach_m!r}")
+    if Channel.TRUTH not in channels_of(friction):
+        return estimate_grid_m
+    step = float(grid[-1] - grid[-2]) if grid.size > 1 else 1.0
+    beyond = np.arange(grid[-1] + step, truth_reach_m + 0.5 * step, step)
+    return np.concatenate([grid, beyond])
 
 
 class FrictionEstimation:

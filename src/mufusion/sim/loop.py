@@ -21,6 +21,7 @@ from mufusion.configurations import FrictionEstimate
 from mufusion.estimators import SensorModel
 from mufusion.planner import Plan
 from mufusion.planner.safety import SafetySettings
+from mufusion.planner.speed_profile import MAX_LOOKAHEAD_M
 from mufusion.sim.components import (
     Controller,
     FrictionSource,
@@ -29,7 +30,7 @@ from mufusion.sim.components import (
     PlantModel,
 )
 from mufusion.sim.estimate_guard import EstimateGuard
-from mufusion.sim.estimation import FrictionEstimation
+from mufusion.sim.estimation import FrictionEstimation, source_grid_m
 from mufusion.sim.events import EventKind
 from mufusion.sim.faults import Fault, active_kinds, estimate_delay_s
 from mufusion.sim.lane_recovery import LaneRecovery
@@ -75,7 +76,12 @@ class ClosedLoop:
     meta
         The run's metadata (written into the log).
     estimate_grid_m
-        Distances ahead at which friction is estimated [m] (paper: 0, 1, …, 50).
+        Distances ahead at which friction is estimated [m] (paper: 0, 1, …, 50); the log's
+        estimates table is on this grid for every source.
+    truth_reach_m
+        How far ahead a source that reads the true friction (GT) is handed it [m]: its grid
+        continues ``estimate_grid_m`` to here (:func:`~mufusion.sim.estimation.source_grid_m`;
+        default: as far as the planner's speed reference looks).
     emergency_on_obstacle
         Switch the planner to its emergency (stop) mode once an obstacle is active.
     faults
@@ -124,6 +130,7 @@ class ClosedLoop:
     lane_bounds_m: tuple[float, float]
     meta: RunMeta
     estimate_grid_m: np.ndarray = field(default_factory=lambda: np.arange(0.0, 51.0, 1.0))
+    truth_reach_m: float = MAX_LOOKAHEAD_M
     emergency_on_obstacle: bool = False
     faults: Sequence[Fault] = ()
     safety: SafetySettings = field(default_factory=SafetySettings)
@@ -144,28 +151,30 @@ class ClosedLoop:
         Raises
         ------
         ValueError
-            If ``duration_s`` is not a positive finite number.
+            If ``duration_s`` is not a positive finite number, or ``truth_reach_m`` ends before
+            the estimate grid.
         """
         if not np.isfinite(duration_s) or duration_s <= 0:
             raise ValueError(f"duration_s must be > 0, got {duration_s!r}")
+        grid = source_grid_m(self.estimate_grid_m, self.friction, self.truth_reach_m)
         log = RunLog(self.meta)
         self._recorder = recorder = Recorder(log, self.world, self.params, self.estimate_grid_m)
         event = recorder.event
-        self._guard = EstimateGuard(self.estimate_grid_m, self.safety, event)
+        self._guard = EstimateGuard(grid, self.safety, event)
         self.supervision = Supervision(
             StopInLane(self.lane_recovery, event),
             LaneRecovery(self.lane_recovery, self.planner, self.params, self.lane_bounds_m,
                          self.world.curvature, event),
-            Probing(self.probing, self.utilization_factor, self.params, self.estimate_grid_m,
+            Probing(self.probing, self.utilization_factor, self.params, grid,
                     self.world.curvature, event),
             MinimalRisk(self.safety, self.params, event),
         )
         self._planning = Planning(
-            self.planner, self.world, self.params, self.estimate_grid_m, self.reference_speed_mps,
+            self.planner, self.world, self.params, grid, self.reference_speed_mps,
             self.lane_bounds_m, self.obstacle_response, self.emergency_on_obstacle)
         self.plan: Plan | None = None
         self._estimation = FrictionEstimation(
-            self.friction, self.sensors, self.world, self.params, self.estimate_grid_m)
+            self.friction, self.sensors, self.world, self.params, grid)
         for fault in self.faults:
             event(fault.start_s, EventKind.FAULT_SCHEDULED, fault.describe())
         try:

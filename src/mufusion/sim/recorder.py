@@ -201,16 +201,20 @@ class Recorder:
         )
 
     def _estimate(self, step: int, t_s: float, s_ego_m: float, estimate: FrictionEstimate) -> None:
+        # On the sensors' grid for every source: GT's estimate reaches further ahead
+        # (sim.estimation.source_grid_m), the plans table has what it planned with there.
         grid = self.grid_m
+        n = grid.size
         grid_abs = s_ego_m + grid
-        nan = np.full(grid.size, np.nan)
+        nan = np.full(n, np.nan)
         fused = estimate.fused
         data_mu, data_margin = nan.copy(), nan.copy()
         if estimate.data is not None:
             # Fusion input placed on the estimate grid (each datum at its grid point).
-            idx = np.clip(np.searchsorted(grid, estimate.data.s_m), 0, grid.size - 1)
-            data_mu[idx] = estimate.data.mu
-            data_margin[idx] = estimate.data.margin
+            within = np.asarray(estimate.data.s_m) <= grid[-1]
+            idx = np.clip(np.searchsorted(grid, estimate.data.s_m[within]), 0, n - 1)
+            data_mu[idx] = estimate.data.mu[within]
+            data_margin[idx] = estimate.data.margin[within]
         self.log.append(
             EstimateGrid(
                 step=step,
@@ -218,10 +222,10 @@ class Recorder:
                 s_ahead_m=grid,
                 s_m=grid_abs,
                 mu_true=self.world.friction(grid_abs),
-                mu_hat=np.asarray(estimate.mu_hat, dtype=float),
-                mean=nan if fused is None else np.asarray(fused.mean),
-                std=nan if fused is None else np.asarray(fused.std),
-                lower=nan if fused is None else np.asarray(fused.lower),
+                mu_hat=np.asarray(estimate.mu_hat, dtype=float)[:n],
+                mean=nan if fused is None else np.asarray(fused.mean)[:n],
+                std=nan if fused is None else np.asarray(fused.std)[:n],
+                lower=nan if fused is None else np.asarray(fused.lower)[:n],
                 data_mu=data_mu,
                 data_margin=data_margin,
             )

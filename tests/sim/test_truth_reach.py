@@ -1,0 +1,69 @@
+"""GT is handed the true friction over the planner's reach, the others their sensors' range."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mufusion.configurations import make_estimator
+from mufusion.metrics import compute_metrics
+from mufusion.scenarios import load_scenario
+from mufusion.scenarios.runner import build_loop, run_loop
+from mufusion.sim.estimation import source_grid_m
+
+# A truck at 23 m/s, 35 m before a 10 m clothoid into a 120° arc of 80 m on μ 0.5 that drops
+# to 0.2 10 m into the arc (55 m ahead): the oracle gives it 0.82 m/s (4.5 m) to spare at
+# the planner's λ = 0.9, with a braking distance of 49 m (docs/decisions/0071).
+DROP_55_M_AHEAD = [
+    "vehicle=truck", "initial_speed_mps=23", "turn.radius_m=80", "turn.angle_rad=2.0944",
+    "turn.start_ahead_m=35", "turn.clothoid_m=10", "turn.direction=right",
+    "friction.mu_before=0.5", "friction.mu_turn=0.2", "friction.change_ahead_m=55",
+]
+
+
+def test_the_truth_reaches_further_than_the_sensors_grid_for_gt_only() -> None:
+    grid = np.arange(0.0, 51.0)
+    gt = source_grid_m(grid, make_estimator("GT"), 120.0)
+    np.testing.assert_array_equal(gt, np.arange(0.0, 121.0))
+    for name in ("L", "P", "F", "F-safe"):
+        assert source_grid_m(grid, make_estimator(name), 120.0) is grid
+    # At its own spacing, ending at the last point within the reach.
+    coarse = source_grid_m(np.arange(0.0, 51.0, 2.5), make_estimator("GT"), 61.0)
+    np.testing.assert_allclose(coarse[-4:], [52.5, 55.0, 57.5, 60.0])
+
+
+@pytest.mark.parametrize("reach", [49.0, np.nan, np.inf])
+def test_a_reach_short_of_the_grid_or_not_finite_is_refused(reach: float) -> None:
+    with pytest.raises(ValueError, match="truth_reach_m"):
+        source_grid_m(np.arange(0.0, 51.0), make_estimator("GT"), reach)
+
+
+def test_gt_plans_with_a_drop_beyond_the_cameras_range_and_f_does_not() -> None:
+    cfg = load_scenario("turn", [*DROP_55_M_AHEAD, "duration_s=0.3"])
+    drop_s = cfg.start_s_m + 55.0
+    plans = {name: run_loop(build_loop(cfg, friction=name), 0.3).plans for name in ("GT", "F")}
+    first = {name: p[p["step"] == 0] for name, p in plans.items()}
+    # Stages past the drop, more than 50 m ahead at the first step.
+    beyond = first["GT"]["s_m"] > drop_s + 1.0
+    assert beyond.any() and (first["GT"]["s_m"] - cfg.start_s_m).max() > 60.0
+    np.testing.assert_allclose(first["GT"]["mu_hat"][beyond], 0.2)
+    # F holds what its camera saw last (μ 0.5's class) beyond its 50 m.
+    assert (first["F"]["mu_hat"][first["F"]["s_m"] > drop_s + 1.0] > 0.3).all()
+    # The log's estimates table stays on the sensors' 0-50 m grid for every source.
+    log = run_loop(build_loop(cfg, friction="GT"), 0.3)
+    assert log.estimates["s_ahead_m"].max() == 50.0
+
+
+@pytest.mark.slow
+def test_gt_keeps_its_lane_where_it_needs_the_drop_before_50_m_ahead() -> None:
+    cfg = load_scenario("turn", [*DROP_55_M_AHEAD, "duration_s=6"])
+    outcome = {}
+    for reach in (50.0, 300.0):
+        loop = build_loop(cfg, friction="GT")
+        loop.truth_reach_m = reach
+        outcome[reach] = compute_metrics(run_loop(loop, cfg.duration_s))
+    assert outcome[300.0].feasibility == "marginal"  # feasible by 0.82 m/s at λ = 0.9
+    # Told of the drop only within the camera's 50 m, it entered the low surface at the
+    # arc's limit speed and left the lane; over the planner's reach it brakes in time.
+    assert outcome[50.0].left_lane
+    assert not outcome[300.0].left_lane and outcome[300.0].min_lane_margin_m > 0.03
