@@ -249,6 +249,7 @@ class ClosedLoop:
         fresh = self._estimate(t, s_ego, utilization, kinds)
         estimate, source, age = self._guard.usable(t, s_ego, fresh, delay_s=estimate_delay_s(
             self.faults, t), corrupt="estimate_nan" in kinds)
+        self._planning.drive_on(s_ego, estimate)
         obstacles = self.world.planner_obstacles(t, s_ego, behind_m=self.params.length_m)
         mrm = self.supervision.minimal_risk
         ctx = self._planning.context(t, xf, obstacles, mrm.active)

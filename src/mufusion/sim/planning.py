@@ -23,6 +23,33 @@ from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import State
 
 
+def road_behind(
+    trail: tuple[np.ndarray, np.ndarray], last: tuple[np.ndarray, np.ndarray] | None,
+    s_anchor_m: float, length_m: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The μ̂ of the road behind ``s_anchor_m``, up to ``length_m`` back: ``(s [m], μ̂)``.
+
+    ``trail`` is the same for the previous step, ``last`` that step's estimate ``(s, μ̂)`` on its
+    grid (absolute positions): each point keeps the value of the latest estimate that covered it,
+    the one made when the centre of gravity was last behind it.
+
+    Examples
+    --------
+    >>> trail = (np.array([7.0, 8.0]), np.array([0.3, 0.3]))
+    >>> last = (np.array([9.0, 10.0, 11.0, 12.0]), np.array([0.3, 0.3, 0.9, 0.9]))
+    >>> s, mu = road_behind(trail, last, 11.5, 4.0)
+    >>> s.tolist(), mu.tolist()
+    ([8.0, 9.0, 10.0, 11.0], [0.3, 0.3, 0.3, 0.9])
+    """
+    s, mu = trail
+    if last is not None:
+        passed = last[0] < s_anchor_m
+        s = np.concatenate([s[s < last[0][0]], last[0][passed]])
+        mu = np.concatenate([trail[1][trail[0] < last[0][0]], last[1][passed]])
+    kept = s >= s_anchor_m - length_m
+    return s[kept], mu[kept]
+
+
 class Planning:
     """Calls the planner for the loop and keeps what carries from one planning step to the next.
 
@@ -73,6 +100,21 @@ class Planning:
         self.longitudinal_forces_n: tuple[float, float] | None = None
         """The front and rear longitudinal forces the wheel torques deliver now: each plan's
         longitudinal force states start from them (planner/ocp_state.py)."""
+        empty = np.empty(0)
+        self._behind: tuple[np.ndarray, np.ndarray] = (empty, empty)
+        self._last: tuple[np.ndarray, np.ndarray] | None = None
+
+    def drive_on(self, s_ego_m: float, estimate: FrictionEstimate) -> None:
+        """Once per planning step, with the estimate the step plans with: the road the vehicle
+        has passed keeps the μ̂ it had (:func:`road_behind`, the vehicle's length back).
+
+        An estimate starts under the centre of gravity, but the rear axle is l_r behind it: the
+        speed reference's μ̂ under the axles (planner.speed_profile.lowest_under_axles) saw the
+        CoG's μ̂ there, so after a rise the truck drove its rear axle, still on ice, at the high
+        friction's pace (docs/decisions/0072).
+        """
+        self._behind = road_behind(self._behind, self._last, s_ego_m, self.params.length_m)
+        self._last = (s_ego_m + self.grid_m, np.asarray(estimate.mu_hat, dtype=float))
 
     def context(
         self, t_s: float, xf: np.ndarray, obstacles: Sequence[PlannerObstacle], minimal_risk: bool
@@ -120,7 +162,6 @@ class Planning:
         followed, docs/decisions/0058) the lead is not one of the obstacles the corridor passes:
         the plan stays behind it, as a stop stays in front of an obstacle.
         """
-        grid_abs = s_anchor_m + self.grid_m
         mu_hat_grid = np.asarray(estimate.mu_hat, dtype=float)
         reference_speed_mps = self.reference_speed_mps
         if any(o.speed_mps > 0.0 for o in obstacles):
@@ -131,9 +172,15 @@ class Planning:
                     o, xf, self.grid_m, mu_hat_grid, self.params, self.obstacle_response)
                     != "lead"]
 
+        # Behind the centre of gravity, the road passed (drive_on); beyond the camera's range
+        # the last estimate is held (TAMP framework).
+        behind_s, behind_mu = self._behind
+        passed = behind_s < s_anchor_m
+        profile_s = np.concatenate([behind_s[passed], s_anchor_m + self.grid_m])
+        profile_mu = np.concatenate([behind_mu[passed], mu_hat_grid])
+
         def mu_hat_of_s(s: np.ndarray) -> np.ndarray:
-            # Beyond the camera's range the last estimate is held (TAMP framework).
-            return np.interp(np.asarray(s, dtype=float), grid_abs, mu_hat_grid)
+            return np.interp(np.asarray(s, dtype=float), profile_s, profile_mu)
 
         return self.planner.step(
             xf,
