@@ -43,9 +43,10 @@ def road_behind(
     """
     s, mu = trail
     if last is not None:
+        older = s < last[0][0]  # behind where the last estimate started
         passed = last[0] < s_anchor_m
-        s = np.concatenate([s[s < last[0][0]], last[0][passed]])
-        mu = np.concatenate([trail[1][trail[0] < last[0][0]], last[1][passed]])
+        s = np.concatenate([s[older], last[0][passed]])
+        mu = np.concatenate([mu[older], last[1][passed]])
     kept = s >= s_anchor_m - length_m
     return s[kept], mu[kept]
 
