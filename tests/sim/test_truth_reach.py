@@ -38,6 +38,13 @@ def test_a_reach_short_of_the_grid_or_not_finite_is_refused(reach: float) -> Non
         source_grid_m(np.arange(0.0, 51.0), make_estimator("GT"), reach)
 
 
+def test_the_scenario_key_is_validated_before_any_run() -> None:
+    with pytest.raises(ValueError, match="truth_reach_m"):
+        load_scenario("turn", ["estimation.truth_reach_m=20"])
+    assert build_loop(load_scenario("turn", ["estimation.truth_reach_m=50"]),
+                      friction="GT").truth_reach_m == 50.0
+
+
 def test_gt_plans_with_a_drop_beyond_the_cameras_range_and_f_does_not() -> None:
     cfg = load_scenario("turn", [*DROP_55_M_AHEAD, "duration_s=0.3"])
     drop_s = cfg.start_s_m + 55.0
@@ -56,12 +63,11 @@ def test_gt_plans_with_a_drop_beyond_the_cameras_range_and_f_does_not() -> None:
 
 @pytest.mark.slow
 def test_gt_keeps_its_lane_where_it_needs_the_drop_before_50_m_ahead() -> None:
-    cfg = load_scenario("turn", [*DROP_55_M_AHEAD, "duration_s=6"])
     outcome = {}
     for reach in (50.0, 300.0):
-        loop = build_loop(cfg, friction="GT")
-        loop.truth_reach_m = reach
-        outcome[reach] = compute_metrics(run_loop(loop, cfg.duration_s))
+        cfg = load_scenario("turn", [*DROP_55_M_AHEAD, "duration_s=6",
+                                     f"estimation.truth_reach_m={reach}"])
+        outcome[reach] = compute_metrics(run_loop(build_loop(cfg, friction="GT"), 6.0))
     assert outcome[300.0].feasibility == "marginal"  # feasible by 0.82 m/s at λ = 0.9
     # Told of the drop only within the camera's 50 m, it entered the low surface at the
     # arc's limit speed and left the lane; over the planner's reach it brakes in time.

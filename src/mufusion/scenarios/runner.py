@@ -39,6 +39,7 @@ from mufusion.planner import (
     TrackingController,
     TractionAdaptivePlanner,
 )
+from mufusion.planner.speed_profile import MAX_LOOKAHEAD_M
 from mufusion.road import Obstacle, Road, obstacle_corners
 from mufusion.scenarios.config import (
     AnyScenario,
@@ -206,6 +207,8 @@ def build_loop(
         probing=cfg.probing,
         lane_recovery=cfg.lane_recovery,
         utilization_factor=config.utilization_factor,
+        truth_reach_m=(MAX_LOOKAHEAD_M if cfg.estimation.truth_reach_m is None
+                       else cfg.estimation.truth_reach_m),
         obstacle_response=ObstacleResponse(
             brake_first=cfg.planner.brake_first,
             utilization_factor=config.utilization_factor,

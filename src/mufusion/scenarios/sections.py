@@ -116,6 +116,10 @@ class EstimationConfig(_Strict):
     once per planning step, or the authors' 4 Hz front-axle samples with a 3-sample buffer."""
     class_table: Literal["paper", "authors"] = "paper"
     """The camera's surface classes: the paper's Table I or the authors' 0.3-wide classes."""
+    truth_reach_m: Annotated[float, Field(ge=50.0, le=1000.0)] | None = None
+    """How far ahead GT (a source reading the truth) is told the true friction [m]; ``None``: as
+    far as the planner looks (300 m, docs/decisions/0071); 50: the camera's range, as the
+    estimators see it."""
 
 
 class PlannerSettings(_Strict):
