@@ -73,3 +73,38 @@ def test_gt_keeps_its_lane_where_it_needs_the_drop_before_50_m_ahead() -> None:
     # arc's limit speed and left the lane; over the planner's reach it brakes in time.
     assert outcome[50.0].left_lane
     assert not outcome[300.0].left_lane and outcome[300.0].min_lane_margin_m > 0.03
+
+
+# The truck at 30 m/s, 100 m before a 20 m clothoid into a 200 m arc, μ 0.7 dropping to 0.15
+# 75 m ahead (the clothoid's end); feasible (oracle +5.0 m/s) for a vehicle that knows the drop
+# in time (docs/decisions/0072: F-safe's exits beyond the camera's range).
+DROP_BEYOND_THE_CAMERA = [
+    "vehicle=truck", "initial_speed_mps=30", "turn.radius_m=200", "turn.angle_rad=1.2",
+    "turn.start_ahead_m=100", "turn.clothoid_m=20", "turn.direction=left",
+    "friction.mu_before=0.7", "friction.mu_turn=0.15", "friction.change_ahead_m=75",
+]
+
+
+def test_the_camera_range_sets_the_estimate_grid_and_the_truth_reaches_at_least_as_far() -> None:
+    cfg = load_scenario("turn", ["estimation.camera_range_m=120"])
+    loop = build_loop(cfg, friction="F-safe")
+    np.testing.assert_array_equal(loop.estimate_grid_m, np.arange(0.0, 121.0))
+    assert loop.sensors.range_m == 120.0
+    with pytest.raises(ValueError, match="truth_reach_m must be >= camera_range_m"):
+        load_scenario("turn", ["estimation.camera_range_m=120", "estimation.truth_reach_m=60"])
+    for bad in ("estimation.camera_range_m=5", "estimation.camera_range_m=400"):
+        with pytest.raises(ValueError, match="camera_range_m"):
+            load_scenario("turn", [bad])
+
+
+@pytest.mark.slow
+def test_f_safe_keeps_its_lane_beyond_a_50_m_camera_once_the_camera_sees_far_enough() -> None:
+    left = {}
+    for reach in (50, 120):
+        cfg = load_scenario("turn", [*DROP_BEYOND_THE_CAMERA, "duration_s=7",
+                                     f"estimation.camera_range_m={reach}"])
+        left[reach] = compute_metrics(run_loop(build_loop(cfg, friction="F-safe"), 7.0))
+    assert left[120].feasibility == "feasible"
+    # Told of the drop 50 m ahead it cannot slow for the arc in time; 120 m ahead it can.
+    assert left[50].left_lane
+    assert not left[120].left_lane

@@ -179,6 +179,7 @@ def build_loop(
         rng=np.random.default_rng(cfg.seed),
         initial_local_mu=cfg.estimation.initial_local_mu,
         local_timing=local_timing(cfg.estimation.local_timing),
+        range_m=cfg.estimation.camera_range_m,
     )
     x0_x, x0_y, x0_psi = (
         float(v) for v in road.to_cartesian(
@@ -207,6 +208,7 @@ def build_loop(
         probing=cfg.probing,
         lane_recovery=cfg.lane_recovery,
         utilization_factor=config.utilization_factor,
+        estimate_grid_m=cfg.estimation.estimate_grid_m(),
         truth_reach_m=(MAX_LOOKAHEAD_M if cfg.estimation.truth_reach_m is None
                        else cfg.estimation.truth_reach_m),
         obstacle_response=ObstacleResponse(

@@ -7,9 +7,10 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from mufusion.estimators import ErrorModel
+from mufusion.estimators import CAMERA_RANGE_M, ErrorModel
 from mufusion.planner.ocp import PlannerConfig
 from mufusion.vehicle.slip_control import SlipControlSettings
 from mufusion.vehicle.stability_control import StabilityControlSettings
@@ -116,10 +117,24 @@ class EstimationConfig(_Strict):
     once per planning step, or the authors' 4 Hz front-axle samples with a 3-sample buffer."""
     class_table: Literal["paper", "authors"] = "paper"
     """The camera's surface classes: the paper's Table I or the authors' 0.3-wide classes."""
-    truth_reach_m: Annotated[float, Field(ge=50.0, le=1000.0)] | None = None
-    """How far ahead GT (a source reading the truth) is told the true friction [m]; ``None``: as
-    far as the planner looks (300 m, docs/decisions/0071); 50: the camera's range, as the
-    estimators see it."""
+    camera_range_m: Annotated[float, Field(ge=10.0, le=300.0)] = CAMERA_RANGE_M
+    """How far ahead the camera classifies the road [m] (paper, Table I: 50 m); the estimate
+    grid runs 0, 1, … up to it."""
+    truth_reach_m: Annotated[float, Field(ge=10.0, le=1000.0)] | None = None
+    """How far ahead GT (a source reading the truth) is told the true friction [m], at least
+    ``camera_range_m``; ``None``: as far as the planner looks (300 m, docs/decisions/0071); the
+    camera's range: as the estimators see the road."""
+
+    @model_validator(mode="after")
+    def _truth_reaches_the_camera_range(self) -> EstimationConfig:
+        if self.truth_reach_m is not None and self.truth_reach_m < self.camera_range_m:
+            raise ValueError(f"truth_reach_m must be >= camera_range_m = "
+                             f"{self.camera_range_m:g} m, got {self.truth_reach_m:g}")
+        return self
+
+    def estimate_grid_m(self) -> np.ndarray:
+        """Distances ahead at which friction is estimated [m]: 0, 1, … up to the camera's range."""
+        return np.arange(0.0, math.floor(self.camera_range_m) + 1.0)
 
 
 class PlannerSettings(_Strict):
