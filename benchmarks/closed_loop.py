@@ -14,7 +14,8 @@ a microsecond per call, so that run's own factor is printed too.
 (``mufusion.reproduction.variants.PAPER_METHOD``: no probing, lane recovery, curve speed
 reference, stop-first, front-force rate or torque preview); the default is the product's
 defaults. ``--blas-threads 1`` limits the BLAS thread pools to one thread (the fusion's small matrix
-products gain nothing from threads on a busy 2-core machine). Numbers go to docs/performance.md,
+products gain nothing from threads on a busy 2-core machine). ``--set KEY=VALUE`` adds a
+scenario override (repeatable), e.g. a longer camera range. Numbers go to docs/performance.md,
 section "## Closed loop".
 """
 
@@ -149,8 +150,8 @@ def _simulated_s(log: RunLog) -> float:
 
 
 def measure(name: str, configuration: str, repeat: int, breakdown_runs: int = 1,
-            method: str = "product") -> dict[str, Any]:
-    cfg = load_scenario(name, list(METHODS[method]))
+            method: str = "product", overrides: list[str] | None = None) -> dict[str, Any]:
+    cfg = load_scenario(name, [*METHODS[method], *(overrides or [])])
     run_scenario(cfg, configuration)  # solver generated/compiled/loaded, caches warm
     wall_factors: list[float] = []
     cpu_factors: list[float] = []
@@ -196,6 +197,9 @@ def main() -> None:
                         help="limit BLAS/OpenMP thread pools to this many threads (≥ 1)")
     parser.add_argument("--method", choices=sorted(METHODS), default="product",
                         help="the product's defaults or the paper's method (as reproduced)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="a scenario override on top of the method's, as `mufusion run "
+                             "--set` (repeatable), e.g. estimation.camera_range_m=120")
     args = parser.parse_args()
     if args.repeat < 1:
         raise ValueError(f"--repeat must be >= 1, got {args.repeat}")
@@ -206,7 +210,7 @@ def main() -> None:
     for name in SCENARIOS:
         with threadpool_limits(limits=args.blas_threads):
             result = measure(name, args.configuration, args.repeat, args.breakdown_runs,
-                             args.method)
+                             args.method, args.set)
         result["blas_threads"] = args.blas_threads
         cpu_ms = 1e3 * result["instrumented_cpu_s"]
         print(f"{name} ({args.configuration}, {args.method}, "
