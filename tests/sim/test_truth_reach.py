@@ -48,8 +48,8 @@ def test_the_scenario_key_is_validated_before_any_run() -> None:
 def test_gt_plans_with_a_drop_beyond_the_cameras_range_and_f_does_not() -> None:
     cfg = load_scenario("turn", [*DROP_55_M_AHEAD, "duration_s=0.3"])
     drop_s = cfg.start_s_m + 55.0
-    plans = {name: run_loop(build_loop(cfg, friction=name), 0.3).plans for name in ("GT", "F")}
-    first = {name: p[p["step"] == 0] for name, p in plans.items()}
+    logs = {name: run_loop(build_loop(cfg, friction=name), 0.3) for name in ("GT", "F")}
+    first = {name: log.plans[log.plans["step"] == 0] for name, log in logs.items()}
     # Stages past the drop, more than 50 m ahead at the first step.
     beyond = first["GT"]["s_m"] > drop_s + 1.0
     assert beyond.any() and (first["GT"]["s_m"] - cfg.start_s_m).max() > 60.0
@@ -57,8 +57,7 @@ def test_gt_plans_with_a_drop_beyond_the_cameras_range_and_f_does_not() -> None:
     # F holds what its camera saw last (μ 0.5's class) beyond its 50 m.
     assert (first["F"]["mu_hat"][first["F"]["s_m"] > drop_s + 1.0] > 0.3).all()
     # The log's estimates table stays on the sensors' 0-50 m grid for every source.
-    log = run_loop(build_loop(cfg, friction="GT"), 0.3)
-    assert log.estimates["s_ahead_m"].max() == 50.0
+    assert logs["GT"].estimates["s_ahead_m"].max() == 50.0
 
 
 @pytest.mark.slow
@@ -68,7 +67,8 @@ def test_gt_keeps_its_lane_where_it_needs_the_drop_before_50_m_ahead() -> None:
         cfg = load_scenario("turn", [*DROP_55_M_AHEAD, "duration_s=6",
                                      f"estimation.truth_reach_m={reach}"])
         outcome[reach] = compute_metrics(run_loop(build_loop(cfg, friction="GT"), 6.0))
-    assert outcome[300.0].feasibility == "marginal"  # feasible by 0.82 m/s at λ = 0.9
+    # A point mass makes it by 0.82 m/s at λ = 0.9: inside the oracle's marginal band.
+    assert outcome[300.0].feasibility == "marginal"
     # Told of the drop only within the camera's 50 m, it entered the low surface at the
     # arc's limit speed and left the lane; over the planner's reach it brakes in time.
     assert outcome[50.0].left_lane
