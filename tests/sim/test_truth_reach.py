@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -60,13 +62,21 @@ def test_gt_plans_with_a_drop_beyond_the_cameras_range_and_f_does_not() -> None:
     assert logs["GT"].estimates["s_ahead_m"].max() == 50.0
 
 
+def _metrics_per_value(
+    turn: list[str], friction: str, key: str, values: tuple[float, ...], duration_s: float
+) -> dict[float, Any]:
+    """The run's metrics of ``friction`` on the turn ``turn`` for each value of one key."""
+    out = {}
+    for value in values:
+        cfg = load_scenario("turn", [*turn, f"duration_s={duration_s}", f"{key}={value}"])
+        out[value] = compute_metrics(run_loop(build_loop(cfg, friction=friction), duration_s))
+    return out
+
+
 @pytest.mark.slow
 def test_gt_keeps_its_lane_where_it_needs_the_drop_before_50_m_ahead() -> None:
-    outcome = {}
-    for reach in (50.0, 300.0):
-        cfg = load_scenario("turn", [*DROP_55_M_AHEAD, "duration_s=6",
-                                     f"estimation.truth_reach_m={reach}"])
-        outcome[reach] = compute_metrics(run_loop(build_loop(cfg, friction="GT"), 6.0))
+    outcome = _metrics_per_value(DROP_55_M_AHEAD, "GT", "estimation.truth_reach_m",
+                                 (50.0, 300.0), 6.0)
     # A point mass makes it by 0.82 m/s at λ = 0.9: inside the oracle's marginal band.
     assert outcome[300.0].feasibility == "marginal"
     # Told of the drop only within the camera's 50 m, it entered the low surface at the
@@ -99,12 +109,9 @@ def test_the_camera_range_sets_the_estimate_grid_and_the_truth_reaches_at_least_
 
 @pytest.mark.slow
 def test_f_safe_keeps_its_lane_beyond_a_50_m_camera_once_the_camera_sees_far_enough() -> None:
-    left = {}
-    for reach in (50, 120):
-        cfg = load_scenario("turn", [*DROP_BEYOND_THE_CAMERA, "duration_s=7",
-                                     f"estimation.camera_range_m={reach}"])
-        left[reach] = compute_metrics(run_loop(build_loop(cfg, friction="F-safe"), 7.0))
-    assert left[120].feasibility == "feasible"
+    left = _metrics_per_value(DROP_BEYOND_THE_CAMERA, "F-safe", "estimation.camera_range_m",
+                              (50.0, 120.0), 7.0)
+    assert left[120.0].feasibility == "feasible"
     # Told of the drop 50 m ahead it cannot slow for the arc in time; 120 m ahead it can.
-    assert left[50].left_lane
-    assert not left[120].left_lane
+    assert left[50.0].left_lane
+    assert not left[120.0].left_lane
