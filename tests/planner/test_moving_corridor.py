@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from mufusion.planner.footprint import violation_m
 from mufusion.planner.ocp import PlannerObstacle, lateral_corridor
-from mufusion.planner.sampling import violation_m
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.planner_model import N_STATES, State
 

@@ -44,6 +44,26 @@ def test_corridor_opens_the_side_with_room() -> None:
     assert np.all(hi[near] == pytest.approx(ROAD[1]))
 
 
+def test_a_heading_swing_does_not_close_the_side_the_road_leaves_room_on() -> None:
+    # Obstacle 1.0 m left of centre: right needs d ≤ 1.0 − 2.3 = −1.3; a road to −1.4 leaves
+    # 0.1 m. A guess yawed right (Δψ −0.05 rad) swings the front corners right by a_f sin Δψ,
+    # about 0.2 m: the swung bounds left no room on the right, and the corridor opened the left,
+    # 3.3 m across (docs/decisions/0073).
+    road = (-1.4, 3.85)
+    guess = np.zeros((41, N_STATES))
+    guess[:, State.s] = np.linspace(60.0, 100.0, 41)
+    guess[:, State.dpsi] = -0.05
+    swing = TRUCK.cog_to_body_front_m * np.sin(0.05)
+    assert road[0] + swing > 1.0 - CLEAR  # the swung bound would leave no room on the right
+    ob = PlannerObstacle(s_m=80.0, d_m=1.0, length_m=1.0, width_m=1.0)
+    lo, hi = lateral_corridor(guess, [ob], *road, TRUCK, 0.5)
+    near = np.abs(guess[1:, State.s] - 80.0) < 0.5 * TRUCK.length_m + 1.0
+    # Passing right, with less than the margin where the swung lower bound lies above the
+    # obstacle's (both bounds are soft); the left side is never opened.
+    assert np.all(hi[near] == pytest.approx(1.0 - CLEAR))
+    assert np.all(lo[near] == pytest.approx(road[0] + swing))
+
+
 def test_stopping_distance_and_decision() -> None:
     assert stopping_distance_m(10.0, 5.0, 0.2) == pytest.approx(2.0 + 10.0)
     kw = dict(utilization_factor=0.9, polygon_sides=12, dead_time_s=0.25)

@@ -143,7 +143,7 @@ def test_gt_in_feasible_general_turns_locks_no_wheel_and_keeps_its_lane_on_rises
 
 # Issue 38's acceptance over seeded draws. Decision 0064 (the front braking bounded where its
 # torque lands) took the drops into 15 m arcs back into the lane; the four rises of mechanism B
-# below are still out in the full grid (docs/feasibility.md, "The general grids").
+# below are still out in the full grid (docs/limit-grids.md).
 @pytest.mark.slow
 @seed(38)
 @_CLOSED_LOOP

@@ -39,7 +39,8 @@ def lateral_corridor(
     bounds shrink by that too. An obstacle
     overlapping the vehicle's footprint at the guess's predicted ``s_k`` closes the side opposite
     to the guess's ``d_k`` (pass left if the guess is left of the obstacle's centre), which keeps
-    the problem convex, unless only the other side has room (:func:`~.passing.passing_left`).
+    the problem convex, unless only the other side has room (:func:`~.passing.passing_left`,
+    judged on the lane bounds and the bulge, not on the heading's swing).
     A moving obstacle is where it is predicted at each stage's time ``k · dt_s``
     (:meth:`PlannerObstacle.s_at_stages`).
     """
@@ -54,6 +55,10 @@ def lateral_corridor(
         bulge = 0.5 * np.abs(kappa) * half_len**2
         hi = np.where(kappa < 0.0, hi - bulge, hi)
         lo = np.where(kappa > 0.0, lo + bulge, lo)
+    # Which side of an obstacle has room is a property of the road (its edges, the curve's
+    # bulge), not of the guess's heading: a passage the swing below narrows is still passable,
+    # with less than the margin, where the other side may need metres more (docs/decisions/0073).
+    road_lo, road_hi = lo, hi
     a_front, a_rear = params.cog_to_body_front_m, params.cog_to_body_rear_m
     # Only lane-keeping headings count in full: in an evasive manoeuvre the heading reaches
     # 0.3-0.5 rad and the full swing (> 1 m each side) would close the corridor the manoeuvre
@@ -69,7 +74,7 @@ def lateral_corridor(
         s_ob = ob.s_at_stages(s_k.shape, dt_s)
         overlap = np.abs(s_k - s_ob) < half_len + 0.5 * ob.length_m + margin_m
         clear = 0.5 * ob.width_m + half_w + margin_m
-        left = passing_left(d_k, ob.d_m, clear, lo, hi)
+        left = passing_left(d_k, ob.d_m, clear, road_lo, road_hi)
         lo = np.where(overlap & left, np.maximum(lo, ob.d_m + clear), lo)
         hi = np.where(overlap & ~left, np.minimum(hi, ob.d_m - clear), hi)
     return lo, hi

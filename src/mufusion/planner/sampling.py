@@ -2,9 +2,10 @@
 
 Candidate manoeuvres (lateral targets × speed targets) are rolled out with the planner's own model
 under a simple tracking law saturated at the friction limits, all at once in numpy. Each roll-out
-and the shifted previous plan are scored on tracking plus a heavy penalty on obstacle and road
-violations; the best becomes the initial guess when it beats the shifted plan. Because the
-obstacle corridor's side is chosen by the guess, this is what lets the planner switch sides.
+and the shifted previous plan are scored on tracking plus a heavy penalty on how far they go
+beyond the road and into obstacles (planner/footprint.py); the best becomes the initial guess
+when it beats the shifted plan. Because the obstacle corridor's side is chosen by the
+guess, this is what lets the planner switch sides.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.planner.config import PlannerConfig, PlannerObstacle
+from mufusion.planner.footprint import peak_violations_m, tracking_cost, violation_m
 from mufusion.planner.ocp import longitudinal_force_bounds_n
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
@@ -33,7 +35,7 @@ from mufusion.vehicle.surface_tires import SurfaceTireTable
 
 _log = logging.getLogger(__name__)
 
-# Cost of one metre of obstacle/road violation relative to tracking (per stage) [1/m].
+# Cost of one metre of obstacle/road violation (at its worst stage) relative to tracking [1/m].
 VIOLATION_WEIGHT = 1e4
 # The shifted previous plan's tracking cost is discounted for consistency between cycles (TAMP:
 # ×0.3); its violation is not, so a plan made obsolete by a pop-up obstacle loses.
@@ -53,37 +55,6 @@ class SamplingConfig:
     speed_gain_1_per_s: float = 1.0
     min_lookahead_m: float = 5.0
     lookahead_time_s: float = 0.5
-
-
-def violation_m(
-    states: np.ndarray,
-    obstacles: Sequence[PlannerObstacle],
-    lane_d_min_m: float,
-    lane_d_max_m: float,
-    params: VehicleParams,
-    margin_m: float,
-    dt_s: float = 0.0,
-) -> np.ndarray:
-    """Summed footprint violation [m] of trajectories ``states (N+1, 6, M)`` → ``(M,)``.
-
-    Stage ``k`` is ``k · dt_s`` after the first state: a moving obstacle is where it is then
-    (:meth:`~mufusion.planner.config.PlannerObstacle.s_at_stages`).
-    """
-    s, d = states[1:, State.s], states[1:, State.d]
-    half_w = 0.5 * params.width_m
-    total = np.maximum(lane_d_min_m - d, 0.0) + np.maximum(d - lane_d_max_m, 0.0)
-    for ob in obstacles:
-        reach = 0.5 * params.length_m + 0.5 * ob.length_m + margin_m
-        overlap = np.abs(s - ob.s_at_stages(s.shape, dt_s)) < reach
-        clear = 0.5 * ob.width_m + half_w + margin_m
-        total = total + np.where(overlap, np.maximum(clear - np.abs(d - ob.d_m), 0.0), 0.0)
-    return total.sum(axis=0)
-
-
-def tracking_cost(states: np.ndarray, v_ref: float, d_ref: float) -> np.ndarray:
-    """Speed and lateral tracking cost of trajectories ``(N+1, 6, M)`` → ``(M,)``."""
-    x = states[1:]
-    return ((x[:, State.vx] - v_ref) ** 2 + 0.5 * (x[:, State.d] - d_ref) ** 2).sum(axis=0)
 
 
 def steering_force_n(
@@ -383,9 +354,15 @@ def sampled_guess(
         with np.errstate(all="ignore"):
             tracking = tracking_cost(both, v_ref, d_ref)
         tracking[0] *= SHIFTED_DISCOUNT
-        cost = tracking + VIOLATION_WEIGHT * violation_m(
+        road, overlap = peak_violations_m(
             both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m, cfg.dt_s
         )
+        # Each violation by how far it goes, not by how long: the targets lie within the road,
+        # so a roll-out beyond its edge is the tracking law's overshoot, which the OCP pulls
+        # back; summed over the stages, a 0.16 m overshoot held for the rest of the horizon
+        # outweighed a guess 0.3 m into an obstacle, and the corridor passed it on the side
+        # with no time to clear it (docs/decisions/0073).
+        cost = tracking + VIOLATION_WEIGHT * (road + overlap)
         cost = np.where(np.isfinite(cost), cost, np.inf)
         best = int(np.argmin(cost))
         if best == 0 or not np.isfinite(cost[best]):
