@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from mufusion.planner.footprint import violation_m
+from mufusion.planner.footprint import stage_violations_m
 from mufusion.planner.ocp import PlannerObstacle, lateral_corridor
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.planner_model import N_STATES, State
@@ -60,6 +61,7 @@ def test_sampling_scores_a_moving_obstacle_at_the_stage_times() -> None:
     oncoming = PlannerObstacle(REACH_M + 10.0, 0.0, OB_LENGTH_M, 1.8, speed_mps=-10.0)
     clear = 0.5 * (1.8 + TRUCK.width_m) + MARGIN_M
     # Five overlapping stages on the obstacle's centre line, each short by the full clearance.
-    got = violation_m(states, [oncoming], *ROAD, TRUCK, MARGIN_M, DT_S)
-    assert got.tolist() == [5 * clear]
-    assert violation_m(states, [oncoming], *ROAD, TRUCK, MARGIN_M).tolist() == [0.0]
+    road, overlap = stage_violations_m(states, [oncoming], *ROAD, TRUCK, MARGIN_M, DT_S)
+    assert road.sum() == 0.0
+    assert overlap.sum(axis=0).tolist() == pytest.approx([5 * clear])
+    assert stage_violations_m(states, [oncoming], *ROAD, TRUCK, MARGIN_M)[1].sum() == 0.0

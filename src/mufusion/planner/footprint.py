@@ -13,38 +13,6 @@ from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import State
 
 
-def violation_m(
-    states: np.ndarray,
-    obstacles: Sequence[PlannerObstacle],
-    lane_d_min_m: float,
-    lane_d_max_m: float,
-    params: VehicleParams,
-    margin_m: float,
-    dt_s: float = 0.0,
-) -> np.ndarray:
-    """Summed footprint violation [m] of trajectories ``states (N+1, 6, M)`` → ``(M,)``: the
-    road's and the obstacles' of :func:`stage_violations_m`, over every stage."""
-    road, overlap = stage_violations_m(states, obstacles, lane_d_min_m, lane_d_max_m, params,
-                                       margin_m, dt_s)
-    return (road + overlap).sum(axis=0)
-
-
-def peak_violations_m(
-    states: np.ndarray,
-    obstacles: Sequence[PlannerObstacle],
-    lane_d_min_m: float,
-    lane_d_max_m: float,
-    params: VehicleParams,
-    margin_m: float,
-    dt_s: float = 0.0,
-) -> tuple[np.ndarray, np.ndarray]:
-    """How far trajectories ``states (N+1, 6, M)`` go beyond the road and into the obstacles
-    at their worst stage [m] → ``(M,)``, ``(M,)`` (:func:`stage_violations_m`)."""
-    road, overlap = stage_violations_m(states, obstacles, lane_d_min_m, lane_d_max_m, params,
-                                       margin_m, dt_s)
-    return road.max(axis=0), overlap.max(axis=0)
-
-
 def stage_violations_m(
     states: np.ndarray,
     obstacles: Sequence[PlannerObstacle],

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.planner.config import PlannerConfig, PlannerObstacle
-from mufusion.planner.footprint import peak_violations_m, tracking_cost, violation_m
+from mufusion.planner.footprint import stage_violations_m, tracking_cost
 from mufusion.planner.ocp import longitudinal_force_bounds_n
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
@@ -336,10 +336,11 @@ def sampled_guess(
     ``sc.trigger_violation_m``). Never raises: sampling is an aid.
     """
     try:
-        shifted_violation = float(violation_m(
+        road, overlap = stage_violations_m(
             guess_x[:, :, None], obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m,
             cfg.dt_s,
-        )[0])
+        )
+        shifted_violation = float((road + overlap).sum())
         if continuing and shifted_violation <= sc.trigger_violation_m:
             return guess_x, guess_u, False
         lateral = np.append(np.linspace(lo_lane, hi_lane, sc.n_lateral), d_ref)
@@ -354,7 +355,7 @@ def sampled_guess(
         with np.errstate(all="ignore"):
             tracking = tracking_cost(both, v_ref, d_ref)
         tracking[0] *= SHIFTED_DISCOUNT
-        road, overlap = peak_violations_m(
+        road, overlap = stage_violations_m(
             both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m, cfg.dt_s
         )
         # Each violation by how far it goes, not by how long: the targets lie within the road,
@@ -362,7 +363,7 @@ def sampled_guess(
         # back; summed over the stages, a 0.16 m overshoot held for the rest of the horizon
         # outweighed a guess 0.3 m into an obstacle, and the corridor passed it on the side
         # with no time to clear it (docs/decisions/0073).
-        cost = tracking + VIOLATION_WEIGHT * (road + overlap)
+        cost = tracking + VIOLATION_WEIGHT * (road.max(axis=0) + overlap.max(axis=0))
         cost = np.where(np.isfinite(cost), cost, np.inf)
         best = int(np.argmin(cost))
         if best == 0 or not np.isfinite(cost[best]):
