@@ -47,7 +47,7 @@ def test_corridor_opens_the_side_with_room() -> None:
 def test_a_heading_swing_does_not_close_the_side_the_road_leaves_room_on() -> None:
     # Obstacle 1.0 m left of centre: right needs d ≤ 1.0 − 2.3 = −1.3; a road to −1.4 leaves
     # 0.1 m. A guess yawed right (Δψ −0.05 rad) swings the front corners right by a_f sin Δψ,
-    # about 0.2 m: the swung bounds left no room on the right, and the corridor opened the left,
+    # about 0.13 m: the swung bounds left no room on the right, and the corridor opened the left,
     # 3.3 m across (docs/decisions/0073).
     road = (-1.4, 3.85)
     guess = np.zeros((41, N_STATES))
