@@ -21,6 +21,7 @@ from mufusion.sim.supervision import (
     planned_footprint_violation_m,
     planned_obstacle_clearance_m,
     planned_obstacle_hit,
+    planned_rear_overuse,
     plausible_estimate,
     relaxation_gain,
     relaxed_by,
@@ -160,13 +161,18 @@ class LaneRecovery(Supervisor):
             if held == 0.0:
                 return plan, estimate
             # The lane is kept with the relaxation held: try one step less of it, so that the
-            # guarantee of the lower bound returns as soon as the lane allows.
+            # guarantee of the lower bound returns as soon as the lane allows — but not a plan
+            # that keeps the lane by braking the rear past its friction: on the road the rear
+            # slides where the plan turns (docs/decisions/0074).
             lower = alphas[alphas.index(held) - 1]
             memory = self.planner.memory
             candidate_estimate = self._relaxed(estimate, lower) if lower > 0.0 else estimate
             assert candidate_estimate is not None
             candidate = ctx.plan(candidate_estimate, mode)
-            if not candidate.fallback and self.footprint_violation_m(candidate) <= tolerance:
+            rear_room = (max(planned_rear_overuse(plan), 1.0)
+                         + self.settings.rear_overuse_tolerance)
+            if (not candidate.fallback and self.footprint_violation_m(candidate) <= tolerance
+                    and planned_rear_overuse(candidate) <= rear_room):
                 self.alpha = lower
                 self.recoveries.append(Recovery(t, RecoveryOutcome.EASED, lower, held))
                 self._event(

@@ -1,6 +1,7 @@
-"""Geometric checks of a plan's predicted footprints: how far they leave the lane, how near they
-come to the obstacles, whether they hit one (lane recovery and the futile-evasion check,
-:mod:`mufusion.sim.supervision`, rank their candidate plans with them)."""
+"""Checks of a plan's predictions: how far its footprints leave the lane, how near they come to
+the obstacles, whether they hit one, how far its rear tire leans past its friction (lane recovery
+and the futile-evasion check, :mod:`mufusion.sim.supervision`, rank their candidate plans with
+them)."""
 
 from __future__ import annotations
 
@@ -9,10 +10,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from mufusion.planner import PlannerObstacle
+from mufusion.planner import Plan, PlannerObstacle
 from mufusion.road.geometry import rectangle_corners, rectangles_overlap, signed_clearance_m
 from mufusion.vehicle.params import VehicleParams
-from mufusion.vehicle.planner_model import State
+from mufusion.vehicle.planner_model import Input, State
 
 
 def planned_footprint_violation_m(
@@ -66,6 +67,23 @@ def planned_footprint_violation_m(
                      np.max(highest - hi - half_w, initial=0.0)))
 
 
+def planned_rear_overuse(plan: Plan) -> float:
+    """The plan's largest rear tire force over its friction radius, stages 1 … N−1 [-].
+
+    ``hypot(F_xr, F_yr) / (λ μ̂ F_zr)`` with the plan's own rear lateral force (the linear tire
+    at its states) and radius (:attr:`~mufusion.planner.Plan.force_limit_rear_n`): 1 at the
+    polygon's vertices, above 1 where the plan uses the rear polygon's slack (the OCP's rear rows
+    are soft, since the rear lateral force follows the state). Stage 0 is left out: its lateral
+    force is the measured state's, which no plan changes. 0 for a plan of one stage.
+    """
+    inputs = np.asarray(plan.inputs, dtype=float)[1:]
+    if inputs.shape[0] == 0:
+        return 0.0
+    force = np.hypot(inputs[:, Input.fxr], np.asarray(plan.rear_lateral_force_n, dtype=float)[1:])
+    radius = np.maximum(np.asarray(plan.force_limit_rear_n, dtype=float)[1:], 1e-9)
+    return float(np.max(force / radius))
+
+
 def planned_obstacle_clearance_m(
     states: np.ndarray,
     obstacles: Sequence[PlannerObstacle],
@@ -82,7 +100,7 @@ def planned_obstacle_clearance_m(
 
     Examples
     --------
-    >>> from mufusion.planner import PlannerObstacle
+    >>> from mufusion.planner import Plan, PlannerObstacle
     >>> from mufusion.vehicle.params import TRUCK
     >>> x = np.zeros((1, 6)); x[0, State.s] = 0.0
     >>> ob = PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)
@@ -133,7 +151,7 @@ def planned_obstacle_hit(
 
     Examples
     --------
-    >>> from mufusion.planner import PlannerObstacle
+    >>> from mufusion.planner import Plan, PlannerObstacle
     >>> from mufusion.vehicle.params import TRUCK
     >>> x = np.zeros((2, 6)); x[:, State.s] = [0.0, 20.0]
     >>> planned_obstacle_hit(x, [PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)],

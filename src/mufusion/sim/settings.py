@@ -97,6 +97,9 @@ class LaneRecoverySettings:
     enabled: bool = True
     violation_tolerance_m: float = 0.05
     steps: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0)
+    # Easing the held relaxation off: how far past its friction radius the candidate's rear may
+    # go beyond the plan it replaces (or beyond 1), as a fraction of the radius.
+    rear_overuse_tolerance: float = 0.05
     # Evading, when every candidate and a plan at the posterior's upper 95 % edge hit the
     # obstacle: brake in lane instead (see the module docstring).
     brake_when_futile: bool = True
@@ -117,6 +120,12 @@ class LaneRecoverySettings:
             raise ValueError(
                 "lane_recovery.violation_tolerance_m must be finite and >= 0 m, "
                 f"got {self.violation_tolerance_m!r}"
+            )
+        if not (math.isfinite(self.rear_overuse_tolerance)
+                and 0.0 <= self.rear_overuse_tolerance <= 1.0):
+            raise ValueError(
+                "lane_recovery.rear_overuse_tolerance must be finite and in [0, 1] (a fraction "
+                f"of the rear friction radius), got {self.rear_overuse_tolerance!r}"
             )
         steps = tuple(self.steps)
         if not steps or any(not 0.0 < a <= 1.0 for a in steps) or list(steps) != sorted(steps):

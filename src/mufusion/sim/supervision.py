@@ -32,11 +32,14 @@ nowhere above what the estimates there declare possible (``y + m``: the mean can
 the class the camera reports ahead; docs/decisions/0061).
 The ``α`` adopted is held: the next step plans with it first and searches upwards from it if
 that plan leaves the lane; if it keeps the lane, one step less is tried, and adopted if it keeps
-the lane too. Without the hold each step started from the
-unrelaxed μ̂, and since its one RTI iteration rarely kept the lane where the relaxed plans of
-the steps before had, the loop flipped between them and never settled on a relaxed plan
-(docs/decisions/0040, "Lane recovery holds its relaxation"). Evading (the lane is left by
-design), nothing is held. The footprint's corners are checked, not the reference
+the lane too without leaning on the rear tire's slack beyond the plan it replaces
+(:func:`planned_rear_overuse` at most ``max(that plan's, 1) + rear_overuse_tolerance``): a plan
+on a lower μ̂ that keeps the lane only by braking the rear past its friction while cornering
+keeps it on paper, and the rear slides (docs/decisions/0074). Without the hold each step
+started from the unrelaxed μ̂, and since its one RTI iteration rarely kept the lane where the
+relaxed plans of the steps before had, the loop flipped between them and never settled on a
+relaxed plan (docs/decisions/0040, "Lane recovery holds its relaxation"). Evading (the lane is
+left by design), nothing is held. The footprint's corners are checked, not the reference
 point alone: on a curve and yawed against the lane the corners reach up to the body's swing and
 bulge further out, and a plan whose reference point stays within its bounds can still carry
 the body over the edge.
@@ -92,6 +95,7 @@ from mufusion.fusion import Z95, declared_central_value, declared_upper_bound, l
 from mufusion.sim.plan_checks import planned_footprint_violation_m as planned_footprint_violation_m
 from mufusion.sim.plan_checks import planned_obstacle_clearance_m as planned_obstacle_clearance_m
 from mufusion.sim.plan_checks import planned_obstacle_hit as planned_obstacle_hit
+from mufusion.sim.plan_checks import planned_rear_overuse as planned_rear_overuse
 from mufusion.sim.settings import LaneRecoverySettings as LaneRecoverySettings
 from mufusion.sim.settings import ProbingSettings
 from mufusion.vehicle.params import GRAVITY_MPS2
