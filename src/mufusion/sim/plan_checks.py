@@ -100,7 +100,7 @@ def planned_obstacle_clearance_m(
 
     Examples
     --------
-    >>> from mufusion.planner import Plan, PlannerObstacle
+    >>> from mufusion.planner import PlannerObstacle
     >>> from mufusion.vehicle.params import TRUCK
     >>> x = np.zeros((1, 6)); x[0, State.s] = 0.0
     >>> ob = PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)
@@ -151,7 +151,7 @@ def planned_obstacle_hit(
 
     Examples
     --------
-    >>> from mufusion.planner import Plan, PlannerObstacle
+    >>> from mufusion.planner import PlannerObstacle
     >>> from mufusion.vehicle.params import TRUCK
     >>> x = np.zeros((2, 6)); x[:, State.s] = [0.0, 20.0]
     >>> planned_obstacle_hit(x, [PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)],
