@@ -14,10 +14,14 @@ received reports (:class:`~mufusion.fusion.reports.ReportData`):
    δ_r)`` all carry one segment label (the camera saw no change of class over the stretch; the
    local estimate counts with the class segment it stands on).
 3. **One-sided rule.** Let L⁺ be the lower bound of the GP with own data and kept reports, L⁻ the
-   one with own data only. μ̂ uses ``L⁺`` where some report confirms, and ``min(L⁺, L⁻)``
-   elsewhere: a report that no own estimate confirms (none near it, or on the other side of a
-   class change) never raises μ̂, and an old high-μ report, whose aged lower bound drops towards
-   the prior's, raises it only as far as its own aged bound allows (step 4) in safe mode.
+   one with own data only, and L⁺_c the one with own data and the kept reports an own datum lies
+   near (the confirmers). μ̂ uses ``min(L⁺, L⁺_c)`` where some report confirms, and
+   ``min(L⁺, L⁻)`` elsewhere: a report that no own estimate confirms (none near it, or on the
+   other side of a class change) never raises μ̂, neither where it lies nor through the
+   posterior it shares with the points others confirm (decision 0076: reports behind the
+   vehicle, where it has no datum, lifted the band ahead), and an old high-μ report, whose aged
+   lower bound drops towards the prior's, raises it only as far as its own aged bound allows
+   (step 4) in safe mode.
 4. **Safe mode's hard bound with reports.** ``H(s) = max(H_own(s), H_rep(s))``. With
    ``report_bound = "consistent"`` (decision 0063, the default), ``H_rep(s)`` is the k-th
    highest (``corroboration``, default 1) over senders of each sender's best
@@ -269,8 +273,14 @@ def fuse_shared(
             engine, prior, s_all, e, resid, sd_all, r.sender)
         return FusedEstimate(e, mean, g_std, g_lower, clip_to_band(mu_hat, top))
     h_rep, confirmed = _report_bound(own, r, confirmers, e, prior.std)
+    # Reports no own datum lies near may lower μ̂ but never raise it, also not through the
+    # posterior at the points other reports confirm: there μ̂ is at most L⁺_c (step 3).
+    near = np.concatenate([np.ones(own.s_m.size, dtype=bool), confirmers])
+    lower_c = lower if near.all() else _latent_lower(
+        engine, prior, s_all[near], e, resid[near], sd_all[near])[2]
     if mode == "paper":
-        one_sided = np.where(confirmed, lower, np.minimum(lower, without.lower))
+        one_sided = np.where(confirmed, np.minimum(lower, lower_c),
+                             np.minimum(lower, without.lower))
         return FusedEstimate(e, mean, std, lower, clip_to_band(one_sided, top))
     # Safe mode: the own-data pieces without reports, then the one-sided rule and the bound H.
     own_sd = noise_sd_of(own.margin)
@@ -281,8 +291,11 @@ def fuse_shared(
     )
     groups = np.concatenate([own_groups, int(own_groups.max()) + 1 + r.sender])
     g_mean, g_std, g_lower = _latent_lower(engine, prior, s_all, e, resid, sd_all, groups)
-    paper_used = np.where(confirmed, lower, np.minimum(lower, paper_without))
-    grouped_used = np.where(confirmed, g_lower, np.minimum(g_lower, without.lower))
+    g_lower_c = g_lower if near.all() else _latent_lower(
+        engine, prior, s_all[near], e, resid[near], sd_all[near], groups[near])[2]
+    paper_used = np.where(confirmed, np.minimum(lower, lower_c), np.minimum(lower, paper_without))
+    grouped_used = np.where(confirmed, np.minimum(g_lower, g_lower_c),
+                            np.minimum(g_lower, without.lower))
     h_own, outside = hard_bound_envelope(own.s_m, own.mu, own.margin, e)
     bound = np.maximum(h_own, h_rep)  # h_rep is −inf where no report counts
     mu_hat = np.minimum(paper_used, bound)
