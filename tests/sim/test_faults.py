@@ -186,3 +186,23 @@ def test_bad_faults_and_settings_are_rejected_up_front() -> None:
         SafetySettings(max_consecutive_fallbacks=0)
     with pytest.raises(ValueError, match=r"faults\.0\.start_s must be before duration_s"):
         load_scenario("popup", ['faults=[{kind="camera_nan", start_s=7, duration_s=1}]'])
+
+
+def test_a_friction_source_that_raises_from_its_first_call_still_gives_a_run() -> None:
+    # The warm-up's estimate is the source's first call: a plug-in estimator broken from the
+    # start used to end the run there, before its first tick, with an empty time series.
+    log = _loop(friction=_Raising(fail_at=0)).run(2.0, warmup_steps=2)
+    assert _events(log, "loop_error").empty
+    assert len(_events(log, "friction_source_error")) >= 1
+    assert _events(log, "minimal_risk")["t_s"].iloc[0] == pytest.approx(0.0)
+    assert log.timeseries["t_s"].iloc[-1] == pytest.approx(2.0)
+    assert compute_metrics(log).minimal_risk
+
+
+def test_a_planner_that_raises_in_the_warm_up_is_survived() -> None:
+    log = _loop(planner=_RaisingPlanner(fail_after=0),
+                safety=SafetySettings(max_consecutive_fallbacks=3)).run(2.0, warmup_steps=2)
+    assert _events(log, "loop_error").empty
+    assert len(_events(log, "planner_error")) >= 1
+    assert log.timeseries["t_s"].iloc[-1] == pytest.approx(2.0)
+    assert compute_metrics(log).minimal_risk

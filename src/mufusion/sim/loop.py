@@ -179,16 +179,32 @@ class ClosedLoop:
             event(fault.start_s, EventKind.FAULT_SCHEDULED, fault.describe())
         try:
             if warmup_steps > 0:
-                x_plant = self.plant.x
-                xf = self.world.frenet_state(x_plant)
-                estimate = self._estimation.initial(x_plant, float(xf[State.s]))
-                self._planning.warm_up(xf, estimate, warmup_steps, self.rates.planner_hz)
+                self._warm_up(warmup_steps)
             self._run(duration_s, progress)
         except Exception as exc:  # never lose the log: end the run, say why
             _log.exception("closed loop ended by an error")
             t_end = float(log.timeseries["t_s"].iloc[-1]) if len(log.timeseries) else 0.0
             event(t_end, EventKind.LOOP_ERROR, f"{type(exc).__name__}: {exc}")
         return log
+
+    def _warm_up(self, steps: int) -> None:
+        """The warm-up plans before the clock starts. A friction source or planner that raises
+        here degrades as it would in the loop (the run goes on, the error in its log), instead
+        of ending the run before its first tick."""
+        x_plant = self.plant.x
+        xf = self.world.frenet_state(x_plant)
+        try:
+            estimate = self._estimation.initial(x_plant, float(xf[State.s]))
+        except Exception as exc:
+            self._recorder.event(0.0, EventKind.FRICTION_SOURCE_ERROR,
+                                 f"{type(exc).__name__}: {exc}")
+            self.supervision.minimal_risk.enter(0.0, "the friction source failed")
+            return
+        try:
+            self._planning.warm_up(xf, estimate, steps, self.rates.planner_hz)
+        except Exception as exc:  # the loop's steps try the planner again and escalate
+            self._recorder.event(0.0, EventKind.PLANNER_ERROR,
+                                 f"planner raised {type(exc).__name__}: {exc} (warm-up)")
 
     def _run(self, duration_s: float, progress: Callable[[float], None] | None) -> None:
         # do-mpc's loop: x = est.make_step(y); u = mpc.make_step(x); y = sim.make_step(u).
