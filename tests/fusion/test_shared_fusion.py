@@ -74,7 +74,10 @@ def test_fresh_accurate_reports_raise_the_bound_and_old_ones_do_not(mode):
                                         settings=SharedSettings(validity_s=1e5))).mu_hat
     assert (fresh >= base - 1e-12).all() and (fresh > base + 0.01).any()
     assert (fresh <= 0.5 + 1e-12).all()
-    assert (old <= base + 1e-3).all()  # aged towards the prior: (almost) nothing left to add
+    # Aged towards the prior (σ ≈ 0.23 each): each sender counts at most as three reports of
+    # the prior's spread (decision 0077), next to 51 camera points of σ 0.05: (almost) nothing
+    # left to add.
+    assert (old <= base + 2e-3).all()
 
 
 @pytest.mark.parametrize("mode", ["paper", "safe"])

@@ -23,10 +23,12 @@ position error δs moves the μ it stands for by at most G·|δs|: the GP gets i
 1.96 σ_s)`` at an evaluation point s.
 
 **Sender cap.** One sender's reports share its bias (a miscalibrated estimator, a constant
-offset): within a length scale ℓ of a report, a sender counts at most ``sender_cap`` reports;
-with n of its reports there, each one's variance is multiplied by ``max(1, n / sender_cap)``.
-Sybil identities (one sender, many pseudonyms) defeat this cap; the one-sided rule and the
-minimum in safe mode's hard bound do not depend on counts (decision 0060).
+offset): the fusion gives each sender's reports one common error of variance ``σ_r² /
+sender_cap`` besides their own, so that a sender counts at most as ``sender_cap`` independent
+reports however many it sends and wherever (paper mode,
+:func:`~mufusion.fusion.shared_fusion.sender_noise`, decision 0077; safe mode counts each sender
+as one). Sybil identities (one sender, many pseudonyms) defeat any per-sender cap; the one-sided
+rule and the minimum in safe mode's hard bound do not depend on counts (decision 0060).
 """
 
 from __future__ import annotations
@@ -133,14 +135,6 @@ class ReportData:
         )
 
 
-def _sender_inflation(s: np.ndarray, sender: np.ndarray, length_m: float, cap: float) -> np.ndarray:
-    """Variance factor per report: ``max(1, n / cap)``, n = its sender's reports within ℓ."""
-    near = np.abs(s[:, None] - s[None, :]) <= length_m
-    same = sender[:, None] == sender[None, :]
-    count = np.count_nonzero(near & same, axis=1)
-    return np.maximum(1.0, count / cap)
-
-
 def report_data(
     reports: Sequence[FrictionReport],
     *,
@@ -154,8 +148,8 @@ def report_data(
 
     Dropped: reports older than ``settings.validity_s`` and those outside ``window_m`` (relative
     positions [m], e.g. the fusion grid with some slack). The GP std of each kept report is
-    ``sqrt((margin/1.96)² + σ²_prior (1 − e^(−Δt/τ)) + (G σ_s)²)`` times ``sqrt`` of its sender
-    factor, floored at ``NOISE_STD_FLOOR`` and capped at ``MARGIN_RANGE[1] / 1.96``.
+    ``sqrt((margin/1.96)² + σ²_prior (1 − k(Δt)) + (G σ_s)²)`` (k the time kernel), floored at
+    ``NOISE_STD_FLOOR`` and capped at ``MARGIN_RANGE[1] / 1.96``.
 
     Raises
     ------
@@ -195,9 +189,7 @@ def report_data(
     aged = age_variance(age, prior.std, settings.tau_s, settings.age_kernel)
     own_sd = margin / Z95
     g_pos = settings.gradient_bound_per_m * pos_sd
-    var = (own_sd * own_sd + aged + g_pos * g_pos) * _sender_inflation(
-        rel, sender, prior.length_scale_m, settings.sender_cap
-    )
+    var = own_sd * own_sd + aged + g_pos * g_pos
     noise_sd = np.clip(np.sqrt(var), NOISE_STD_FLOOR, MARGIN_RANGE[1] / Z95)
     # Each side ages like the whole report: mu ∓ 1.96 sqrt(((mu − bound)/1.96)² + σ²_age).
     low_sd = (mu - own_lower) / Z95

@@ -39,6 +39,7 @@ received reports (:class:`~mufusion.fusion.reports.ReportData`):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,7 +49,7 @@ from mufusion.fusion.data import FusedEstimate, FusionData, clip_to_band
 from mufusion.fusion.engine import PosteriorEngine, noise_sd_of
 from mufusion.fusion.prior import Z95, GPPrior
 from mufusion.fusion.reports import ReportData, age_variance
-from mufusion.fusion.safe import grouped_noise, hard_bound_envelope
+from mufusion.fusion.safe import SHARED_ERROR_FRACTION, grouped_noise, hard_bound_envelope
 
 
 @dataclass(frozen=True)
@@ -220,6 +221,35 @@ def conflict_pairs(r: ReportData, prior_std: float) -> tuple[np.ndarray, np.ndar
     return w[keep], h[keep]
 
 
+def sender_noise(own_sd: np.ndarray, r: ReportData) -> tuple[np.ndarray, np.ndarray]:
+    """Paper mode's noise with reports: the own data independent, each sender's reports sharing
+    one error (the sender cap, decisions 0075 and 0077).
+
+    A report's variance σ_r² splits into ``ρ σ_r²`` common to its sender and ``(1 − ρ) σ_r²``
+    of its own, ``ρ = 1 / sender_cap`` (at most ``SHARED_ERROR_FRACTION``): ``Σ_ij = ρ σ_i σ_j``
+    for two reports of one sender. However many reports a sender sends, and wherever, their
+    mean keeps the variance ``ρ σ²``: the sender counts at most as ``sender_cap`` independent
+    reports. Returns the independent std per point (own data first) and one shared column per
+    sender (:meth:`~mufusion.fusion.engine.PosteriorEngine.latent`).
+
+    Examples
+    --------
+    >>> from mufusion.fusion import PAPER_PRIOR
+    >>> from mufusion.estimators.shared import FrictionReport
+    >>> from mufusion.fusion.reports import report_data
+    >>> rs = [FrictionReport.numeric(x, 0.5, 0.025, sender="a") for x in (5.0, 6.0)]
+    >>> d = report_data(rs, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR)
+    >>> indep, shared = sender_noise(np.array([0.05]), d)
+    >>> bool(indep[0] == 0.05), bool(np.allclose(3 * shared[1:, 0] ** 2, d.noise_sd ** 2))
+    (True, True)
+    """
+    rho = min(1.0 / r.settings.sender_cap, SHARED_ERROR_FRACTION)
+    _, column = np.unique(r.sender, return_inverse=True)
+    shared = np.zeros((own_sd.size + r.size, int(column.max()) + 1 if r.size else 0))
+    shared[own_sd.size + np.arange(r.size), column] = math.sqrt(rho) * r.noise_sd
+    return np.concatenate([own_sd, math.sqrt(1.0 - rho) * r.noise_sd]), shared
+
+
 def _latent_lower(
     engine: PosteriorEngine,
     prior: GPPrior,
@@ -228,9 +258,12 @@ def _latent_lower(
     resid: np.ndarray,
     noise_sd: np.ndarray,
     groups: np.ndarray | None = None,
+    split: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Posterior mean, std and lower bound (grouped noise if ``groups`` is given)."""
-    split = None if groups is None else grouped_noise(noise_sd, groups)
+    """Posterior mean, std and lower bound (grouped noise if ``groups`` is given, or the
+    independent std and shared columns ``split``)."""
+    if split is None and groups is not None:
+        split = grouped_noise(noise_sd, groups)
     if split is None:
         offset, std = engine.latent(prior, s, e, resid, noise_sd)
     else:
@@ -261,8 +294,10 @@ def fuse_shared(
     confirmers = screen.near_own[screen.kept]
     s_all = np.concatenate([own.s_m, r.s_m])
     resid = np.concatenate([own.mu, r.mu]) - prior.mean
-    sd_all = np.concatenate([noise_sd_of(own.margin), r.noise_sd])
-    mean, std, lower = _latent_lower(engine, prior, s_all, e, resid, sd_all)
+    own_sd = noise_sd_of(own.margin)
+    sd_all = np.concatenate([own_sd, r.noise_sd])
+    mean, std, lower = _latent_lower(engine, prior, s_all, e, resid, sd_all,
+                                     split=sender_noise(own_sd, r))
     top = max(prior.upper, own.mu_max, float(r.mu.max()))
     if own.s_m.size == 0:
         # Nothing of the vehicle's own can confirm a report: they may only lower μ̂.
@@ -277,13 +312,13 @@ def fuse_shared(
     # posterior at the points other reports confirm: there μ̂ is at most L⁺_c (step 3).
     near = np.concatenate([np.ones(own.s_m.size, dtype=bool), confirmers])
     lower_c = lower if near.all() else _latent_lower(
-        engine, prior, s_all[near], e, resid[near], sd_all[near])[2]
+        engine, prior, s_all[near], e, resid[near], sd_all[near],
+        split=sender_noise(own_sd, r.subset(confirmers)))[2]
     if mode == "paper":
         one_sided = np.where(confirmed, np.minimum(lower, lower_c),
                              np.minimum(lower, without.lower))
         return FusedEstimate(e, mean, std, lower, clip_to_band(one_sided, top))
     # Safe mode: the own-data pieces without reports, then the one-sided rule and the bound H.
-    own_sd = noise_sd_of(own.margin)
     own_resid = own.mu - prior.mean
     _, _, paper_without = _latent_lower(engine, prior, own.s_m, e, own_resid, own_sd)
     own_groups = (
