@@ -42,6 +42,19 @@ def wait_until_session_empty(session_id: int, timeout_s: float) -> list[int]:
         time.sleep(0.1)
 
 
+def command_lines(pids: Sequence[int]) -> list[str]:
+    """Each process's command line (for a failing test's message: what was left alive)."""
+    lines = []
+    for pid in pids:
+        try:
+            raw = Path(f"/proc/{pid}/cmdline").read_bytes()
+        except OSError:
+            raw = b"(gone)"
+        text = raw.replace(b"\0", b" ").decode(errors="replace").strip()
+        lines.append(f"{pid}: {text}")
+    return lines
+
+
 def _is_zombie(pid: int) -> bool:
     try:
         stat = Path(f"/proc/{pid}/stat").read_text()

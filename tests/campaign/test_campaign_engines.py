@@ -14,7 +14,7 @@ import pytest
 from mufusion.campaign.engines import RAY_INIT_TIMEOUT_S, check_reachable, dispatch
 from mufusion.campaign.stats import WALL_CLOCK_SUFFIX
 from mufusion.sim.log import STAMPS_KEY
-from processes import isolated, mufusion_command, wait_until_session_empty
+from processes import command_lines, isolated, mufusion_command, wait_until_session_empty
 
 CAMPAIGN = """
 scenarios = ["popup"]
@@ -103,8 +103,11 @@ def test_sigint_stops_a_ray_campaign_and_its_local_instance(tmp_path):
         proc.send_signal(signal.SIGINT)
         output, _ = proc.communicate(timeout=120)
         assert proc.returncode == 130, output
-        # The local Ray instance (raylet, GCS, workers) went down with the command.
-        assert wait_until_session_empty(proc.pid, timeout_s=30.0) == [], output
+        # The local Ray instance (raylet, GCS, workers) went down with the command. Its
+        # teardown is asynchronous (the raylet reaps its workers after the driver has gone):
+        # on a loaded 2-core machine one process once outlived 30 s, so it gets 60 s.
+        left = wait_until_session_empty(proc.pid, timeout_s=60.0)
+        assert left == [], (output, command_lines(left))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["partial"] is True and 1 <= summary["completed"] < 40
     assert summary["completed"] + summary["pending"] == 40
