@@ -25,9 +25,9 @@ position error δs moves the μ it stands for by at most G·|δs|: the GP gets i
 **Sender cap.** One sender's reports share its bias (a miscalibrated estimator, a constant
 offset): the fusion gives each sender's reports one common error of variance ``σ_r² /
 sender_cap`` besides their own, so that a sender counts at most as ``sender_cap`` independent
-reports however many it sends and wherever (paper mode,
-:func:`~mufusion.fusion.shared_fusion.sender_noise`, decision 0077; safe mode counts each sender
-as one). Sybil identities (one sender, many pseudonyms) defeat any per-sender cap; the one-sided
+reports however many it sends and wherever (the paper posterior of both modes,
+:func:`~mufusion.fusion.shared_fusion.sender_noise`, decision 0077; safe mode's grouped
+posterior counts each sender as one). Sybil identities (one sender, many pseudonyms) defeat any per-sender cap; the one-sided
 rule and the minimum in safe mode's hard bound do not depend on counts (decision 0060).
 """
 

@@ -222,8 +222,9 @@ def conflict_pairs(r: ReportData, prior_std: float) -> tuple[np.ndarray, np.ndar
 
 
 def sender_noise(own_sd: np.ndarray, r: ReportData) -> tuple[np.ndarray, np.ndarray]:
-    """Paper mode's noise with reports: the own data independent, each sender's reports sharing
-    one error (the sender cap, decisions 0075 and 0077).
+    """The paper posterior's noise with reports (paper mode, and safe mode's paper part): the own
+    data independent, each sender's reports sharing one error (the sender cap, decisions 0075
+    and 0077).
 
     A report's variance σ_r² splits into ``ρ σ_r²`` common to its sender and ``(1 − ρ) σ_r²``
     of its own, ``ρ = 1 / sender_cap`` (at most ``SHARED_ERROR_FRACTION``): ``Σ_ij = ρ σ_i σ_j``
