@@ -27,8 +27,9 @@ offset): the fusion gives each sender's reports one common error of variance ``Ï
 sender_cap`` besides their own, so that a sender counts at most as ``sender_cap`` independent
 reports however many it sends and wherever (the paper posterior of both modes,
 :func:`~mufusion.fusion.shared_fusion.sender_noise`, decision 0077; safe mode's grouped
-posterior counts each sender as one). Sybil identities (one sender, many pseudonyms) defeat any per-sender cap; the one-sided
-rule and the minimum in safe mode's hard bound do not depend on counts (decision 0060).
+posterior counts each sender as one). Sybil identities (one sender, many pseudonyms) defeat any
+per-sender cap; the one-sided rule and the minimum in safe mode's hard bound do not depend on
+counts (decision 0060).
 """
 
 from __future__ import annotations
