@@ -290,3 +290,20 @@ def test_one_miscalibrated_sender_alone_cannot_lift_the_bound():
         hat[k] = _fuse(data, "safe", rd).mu_hat
     assert hat[1].max() > 0.5
     assert (hat[2] <= 0.5 + 1e-9).all()
+
+
+def test_an_honest_report_behind_the_vehicle_leaves_out_a_wrong_one_ahead():
+    """Decision 0078: the camera errs high (0.6 ± 0.1 on μ 0.5) and an optimistic sender (+0.2)
+    reported just ahead of the vehicle, where the honest sender's last reports lie behind it,
+    outside the own data. The two cannot both be right under the gradient bound and no class
+    change is known between them, so the wrong report is left out and μ̂ stays at or below μ."""
+    data = _own(np.full(51, 0.6), np.full(51, 0.1), None, "safe")
+    honest = [FrictionReport.numeric(s, 0.5, 0.025, position_std_m=0.5, sender="honest")
+              for s in (-9.0, -6.0, -3.0)]
+    wrong = [FrictionReport.numeric(s, 0.7, 0.025, position_std_m=0.5, sender="offset")
+             for s in (-8.0, 0.5, 2.0)]
+    rd = report_data(honest + wrong, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR)
+    assert (_fuse(data, "safe", rd).mu_hat <= 0.5 + 1e-9).all()
+    # Alone, the wrong reports ahead lift it: the test above is not vacuous.
+    alone = report_data(wrong, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR)
+    assert _fuse(data, "safe", alone).mu_hat.max() > 0.5 + 0.05

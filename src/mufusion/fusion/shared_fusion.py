@@ -27,14 +27,16 @@ received reports (:class:`~mufusion.fusion.reports.ReportData`):
    highest (``corroboration``, default 1) over senders of each sender's best
    ``lower_c(Δt) − G·(|s − s_c| + δ_c)``, c over the reports an own datum confirms in s's class
    segment (at any distance: the position term prices it) that conflict with no report of that
-   segment (:func:`conflicts`: c's lower bound, moved to the other report's place and creation
-   time, above its upper bound). Under the premise each term is ≤ μ(s); a wrong report that
-   survives lifts H by at most the interval of the honest report nearest s, ``2 m_h + 2 G·(|s −
-   s_h| + δ_h)``, however many identities send it. With ``"lowest"`` (decision 0060), where a
-   report confirms at s, ``H_rep(s) = min_r lower_r(Δt) − min_c G·(|s − s_c| + δ_c)``, r over the
-   kept reports near s or in its segment: no optimistic report lifts it while one honest report
-   is near, but every honest report counts at its worst. μ̂ = min(one-sided paper lower bound,
-   H) on the data, and also at most the one-sided grouped lower bound beyond them.
+   segment or of the road the own data do not cover (behind the vehicle, beyond the camera; no
+   class change is known there, decision 0078) (:func:`conflicts`: c's lower bound, moved to the
+   other report's place and creation time, above its upper bound). Under the premise each term
+   is ≤ μ(s); a wrong report that survives lifts H by at most the interval of the honest
+   report nearest s, ``2 m_h + 2 G·(|s − s_h| + δ_h)``, however many identities send it. With
+   ``"lowest"`` (decision 0060), where a report confirms at s, ``H_rep(s) = min_r lower_r(Δt) −
+   min_c G·(|s − s_c| + δ_c)``, r over the kept reports near s or in its segment: no optimistic
+   report lifts it while one honest report is near, but every honest report counts at its
+   worst. μ̂ = min(one-sided paper lower bound, H) on the data, and also at most the one-sided
+   grouped lower bound beyond them.
 """
 
 from __future__ import annotations
@@ -138,7 +140,8 @@ def _report_bound(
     inside = (lo >= s_o[0] - 1e-9) & (hi <= s_o[-1] + 1e-9)
     i0 = np.clip(np.searchsorted(s_o, lo + 1e-9, side="right") - 1, 0, s_o.size - 1)
     i1 = np.clip(np.searchsorted(s_o, hi - 1e-9, side="left"), 0, s_o.size - 1)
-    one_segment = inside & (changes[i1] == changes[i0])
+    no_change_seen = changes[i1] == changes[i0]  # also where the stretch leaves the own data
+    one_segment = inside & no_change_seen
     confirms = within & confirmers[None, :] & one_segment
     confirmed = confirms.any(axis=1)
     term = g * (dist + r.position_bound_m[None, :])  # position term of each report at each s
@@ -159,13 +162,16 @@ def _report_bound(
     # prices the distance, and a cut-off at the reach would leave a hole at the class bound
     # wherever one packet is lost or one report is left out.
     w, h = conflict_pairs(r, prior_std)
+    # The report that conflicts may lie where the own data do not reach (behind the vehicle,
+    # beyond the camera): no class change is known there, and leaving a report out only lowers
+    # H, so it counts unless the camera saw a change between it and s (decision 0078).
     excluded = np.zeros_like(one_segment)
     if w.size:
-        # excluded[s, w] = any over the pairs (w, h) of one_segment[s, h]: grouped by w.
+        # excluded[s, w] = any over the pairs (w, h) of no_change_seen[s, h]: grouped by w.
         order = np.argsort(w, kind="stable")
         w, h = w[order], h[order]
         starts = np.flatnonzero(np.concatenate([[True], w[1:] != w[:-1]]))
-        excluded[:, w[starts]] = np.logical_or.reduceat(one_segment[:, h], starts, axis=1)
+        excluded[:, w[starts]] = np.logical_or.reduceat(no_change_seen[:, h], starts, axis=1)
     agree = confirmers[None, :] & one_segment & ~excluded
     return corroborated(np.where(agree, r.lower[None, :] - term, -np.inf), r.sender,
                         r.settings.corroboration), confirmed
