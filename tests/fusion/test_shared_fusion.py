@@ -307,3 +307,28 @@ def test_an_honest_report_behind_the_vehicle_leaves_out_a_wrong_one_ahead():
     # Alone, the wrong reports ahead lift it: the test above is not vacuous.
     alone = report_data(wrong, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR)
     assert _fuse(data, "safe", alone).mu_hat.max() > 0.5 + 0.05
+
+
+def test_a_report_behind_the_vehicle_leaves_none_out_beyond_a_class_change_the_camera_saw():
+    """Decision 0078's limit: a low report behind the vehicle and a high one beyond a class
+    change the camera saw (wet 0.5 up to 8 m, dry 0.8 after) can both be right, although they
+    conflict under the gradient bound, so the high one still lifts safe mode's μ̂ in the dry
+    segment as it does without the low one (exclusion wherever no change is *known* would
+    leave it out: the mutation this test catches)."""
+    cls = np.where(GRID < 8.0, 0.5, 0.8)
+    margin = np.where(GRID < 8.0, 0.1, 0.2)
+    data = _own(cls, margin, None, "safe")
+    low = [FrictionReport.numeric(-3.0, 0.5, 0.025, position_std_m=0.5, sender="behind")]
+    high = [FrictionReport.numeric(s, 0.8, 0.025, position_std_m=0.5, sender="ahead")
+            for s in (9.0, 10.0, 11.0)]
+    dry = (GRID >= 9.0) & (GRID <= 15.0)
+    with_low = _fuse(data, "safe", report_data(low + high, t_now_s=0.0, s_ego_m=0.0,
+                                               prior=PAPER_PRIOR)).mu_hat
+    alone = _fuse(data, "safe", report_data(high, t_now_s=0.0, s_ego_m=0.0,
+                                            prior=PAPER_PRIOR)).mu_hat
+    without = _fuse(data, "safe").mu_hat
+    assert conflicts(report_data(low + high, t_now_s=0.0, s_ego_m=0.0, prior=PAPER_PRIOR),
+                     PAPER_PRIOR.std)[1:, 0].all()
+    assert alone[dry].mean() > without[dry].mean() + 0.05
+    # The low report enters the posterior (a few thousandths), not the hard bound.
+    np.testing.assert_allclose(with_low[dry], alone[dry], atol=0.01)
