@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from mufusion.campaign.fleet_study import summarise
+from mufusion.campaign.fleet_study import report_markdown, summarise
 from mufusion.cli import app
 from mufusion.plots.fleet import build_band_figure, build_first_last_figure
 from mufusion.scenarios import load_scenario
@@ -83,6 +83,12 @@ def test_study_summary_counts_and_closes_gaps():
     assert s["car F-safe+shared fresh"]["closure_at_least_half"]["successes"] == 1
     assert s["car F-safe+shared wrong"]["closure_at_least_half"]["successes"] == 0
     assert s["car F-safe+shared old"]["not_worse_than_baseline"]["rate"] == 1.0
+    table = report_markdown(s).splitlines()
+    assert len(table) == 2 + len(s)
+    fresh = next(line for line in table if line.startswith("| car F-safe+shared fresh |"))
+    assert "| 0.60 | 1/1 [" in fresh
+    wrong = next(line for line in table if line.startswith("| car F-safe+shared wrong |"))
+    assert "| 0.40 | 0/1 [0.00, " in wrong
 
 
 def test_fleet_command_writes_logs_summary_and_figures(tmp_path):

@@ -16,7 +16,8 @@ Per run of vehicle N+1: kept its lane; any planned stage above the true μ (the 
 μ_gt); the share of horizon points with μ̂ > μ_gt (the estimates); planned utilisation at the
 comparison instant and the share of the baseline's gap to GT it closes. Proportions come with
 Wilson intervals (:func:`~mufusion.campaign.stats.wilson_interval`). Run it as
-``python -m mufusion.campaign.fleet_study OUT.json [SEEDS]`` (nice it on a shared machine).
+``python -m mufusion.campaign.fleet_study OUT.json [SEEDS [CAMERA]]`` (nice it on a shared
+machine); the acceptance table goes to ``OUT.md``.
 """
 
 from __future__ import annotations
@@ -153,9 +154,42 @@ def summarise(rows: list[dict]) -> dict:
     return summary
 
 
+def _wilson_cell(share: dict) -> str:
+    lo, hi = share["wilson95"]
+    return f"{share['successes']}/{share['trials']} [{lo:.2f}, {hi:.2f}]"
+
+
+def report_markdown(summary: dict) -> str:
+    """The acceptance table of :func:`summarise` as Markdown, one row per vehicle type, family
+    and condition (the table docs/shared-friction.md quotes).
+
+    Columns: kept its lane and never planned above μ (Wilson 95 % intervals); the share of
+    horizon points with μ̂ > μ (mean and max over the runs; the baseline's mean); the median
+    share of the baseline's gap to GT closed; how many runs closed at least half of it; how
+    many were not worse than the baseline.
+    """
+    lines = [
+        "| run | kept lane | never planned above μ | horizon points μ̂ > μ (mean / max; "
+        "baseline mean) | gap closed (median) | closed ≥ half | not worse than baseline |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for key, v in summary.items():
+        median = "—" if v["closure_median"] is None else f"{v['closure_median']:.2f}"
+        lines.append(
+            f"| {key} | {_wilson_cell(v['kept_lane'])} | "
+            f"{_wilson_cell(v['never_planned_above_mu'])} | "
+            f"{100 * v['horizon_over_share_mean']:.2f} % / "
+            f"{100 * v['horizon_over_share_max']:.2f} %; "
+            f"{100 * v['baseline_over_share_mean']:.2f} % | {median} | "
+            f"{_wilson_cell(v['closure_at_least_half'])} | "
+            f"{_wilson_cell(v['not_worse_than_baseline'])} |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str]) -> None:
     """``OUT.json [SEEDS [CAMERA]]``: run the study (car and truck, seeds 0 … SEEDS−1, the
-    camera's error model one of ``CAMERA_ERRORS``, default none) and write it."""
+    camera's error model one of ``CAMERA_ERRORS``, default none) and write it, with its table
+    as ``OUT.md`` (:func:`report_markdown`)."""
     out = Path(argv[0])
     seeds = int(argv[1]) if len(argv) > 1 else 5
     camera = argv[2] if len(argv) > 2 else "none"
@@ -166,7 +200,9 @@ def main(argv: list[str]) -> None:
         for seed in range(seeds):
             rows.append(study_seed(vehicle, seed, camera))
             print(f"{vehicle} seed {seed} done", flush=True)
-            out.write_text(json.dumps({"rows": rows, "summary": summarise(rows)}, indent=2))
+            summary = summarise(rows)
+            out.write_text(json.dumps({"rows": rows, "summary": summary}, indent=2))
+            out.with_suffix(".md").write_text(report_markdown(summary))
 
 
 if __name__ == "__main__":  # pragma: no cover
