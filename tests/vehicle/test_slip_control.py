@@ -152,3 +152,33 @@ def test_the_run_summary_says_whether_a_lock_outlasted_one_abs_cycle() -> None:
     assert _wheels(ts.assign(vx_mps=-3.0), tick)["wheel_lock_max_s"] == 0.0  # backwards
     # A record from before wheel slips were logged: nothing to say.
     assert _wheels(ts.assign(wheel_slip_front=np.nan, wheel_slip_rear=np.nan), tick) == {}
+
+
+@pytest.mark.parametrize("params", [CAR, TRUCK], ids=["car", "truck"])
+def test_a_curves_imu_bias_does_not_read_braking_within_grip_as_a_lock(params) -> None:
+    # Braking in a curve with body slip, the IMU measures a_x = v̇_x − ψ̇ v_y: here it reads
+    # 0.8 m/s² less deceleration than the vehicle has. The wheels brake within their grip (2 %,
+    # then 4 % slip, decelerating with the body). An estimate that may only fall with the IMU
+    # drifted 2.4 m/s above them in 3 s, read a lock and dumped the firm brake torque the road
+    # could take (docs/decisions/0080); the reference must follow the wheels.
+    from mufusion.vehicle.slip_control import WheelSlipController
+
+    dt, radius = 0.005, params.wheel_radius_m
+    control = WheelSlipController(params, SlipControlSettings(), dt, 20.0)
+    speed, decel, bias = 20.0, 2.0, 0.8
+    removed, worst_gap = 0.0, 0.0
+    for step in range(round(4.0 / dt)):
+        t = step * dt
+        light = t < 3.0
+        slip = 0.02 if light else 0.04
+        torque = -0.05 * params.max_brake_torque_front_nm if light else \
+            -0.4 * params.max_brake_torque_front_nm
+        rate = decel if light else 3.0 * decel
+        omega = speed * (1.0 - slip) / radius
+        _cmd, status = control.modulate((0.0, torque, 0.0), omega, omega, -rate + bias,
+                                       torque, 0.0, t)
+        removed = max(removed, status.front.torque_removed_nm)
+        worst_gap = max(worst_gap, status.reference_speed_mps - speed)
+        speed -= rate * dt
+    assert removed == 0.0
+    assert worst_gap < 0.05  # the reference stays with the wheels (2.4 m/s above before)

@@ -32,8 +32,14 @@ per axle, in four phases:
 
 Traction control is the same machine on drive torque with the signs mirrored (a spinning wheel
 instead of a locking one). The reference speed is the front wheel's while nothing brakes (neither
-preset drives its front axle, so it rolls freely), else the IMU's acceleration integrated and never
-below the fastest wheel: the usual estimate on a rear-driven vehicle.
+preset drives its front axle, so it rolls freely). While braking it is the fastest wheel, falling
+no faster than the IMU's deceleration plus ``reference_decel_margin_mps2`` (the usual estimate on
+a rear-driven vehicle: a wheel that runs away towards lock falls far faster than that and leaves
+the reference behind). The margin matters: the IMU measures ``a_x = v̇_x − ψ̇ v_y``, and in a curve
+with body slip the term ``ψ̇ v_y`` (up to ``a_y β``, above 1 m/s² in a drift) makes the integrated
+IMU decelerate slower than the vehicle. An estimate that may only fall with the IMU then drifts
+above the wheels while they brake within their grip, reads their slip as a lock and dumps a brake
+torque the road could take (docs/decisions/0080).
 
 The phases and thresholds act on the vehicle's own signals only, so a run whose wheels never come
 near their force peak is unchanged by the controller (bit for bit: it passes the command through).
@@ -89,6 +95,10 @@ class SlipControlSettings:
     min_speed_mps
         Below this reference speed the controller passes the command through (the brakes hold a
         stopped vehicle) [m/s], ≥ 0.
+    reference_decel_margin_mps2
+        How much faster than the IMU's deceleration the reference speed may fall while braking,
+        to follow wheels that decelerate within their grip [m/s²], > 0 (the IMU misses the
+        curve's ``ψ̇ v_y``; a locking wheel decelerates many times faster).
     """
 
     abs_enabled: bool = True
@@ -101,6 +111,7 @@ class SlipControlSettings:
     reapply_fraction: float = 0.7
     reapply_time_s: float = 0.3
     min_speed_mps: float = 2.0
+    reference_decel_margin_mps2: float = 2.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -125,7 +136,8 @@ class SlipControlSettings:
         if not 0.0 < self.reapply_fraction <= 1.0:
             raise ValueError(
                 f"reapply_fraction must be in (0, 1], got {self.reapply_fraction!r}")
-        for name in ("wheel_accel_margin_mps2", "max_hold_s", "reapply_time_s"):
+        for name in ("wheel_accel_margin_mps2", "max_hold_s", "reapply_time_s",
+                     "reference_decel_margin_mps2"):
             if not getattr(self, name) > 0.0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
         if not self.min_speed_mps >= 0.0:
@@ -294,8 +306,13 @@ class WheelSlipController:
         wheel_f, wheel_r = radius * omega_front_radps, radius * omega_rear_radps
         braking = asked_f < 0.0 or asked_r < 0.0 or torque_front_nm < 0.0 or torque_rear_nm < 0.0
         if braking:
-            predicted = self.reference_speed_mps + accel_x_mps2 * dt
-            reference = max(predicted, wheel_f, wheel_r)
+            # While a wheel is modulated no wheel need roll at the vehicle's speed: the IMU
+            # alone carries the reference through the cycle (its drift over one is small).
+            controlled = (self._front.phase is not SlipPhase.PASS
+                          or self._rear.phase is not SlipPhase.PASS)
+            margin = 0.0 if controlled else cfg.reference_decel_margin_mps2
+            floor = self.reference_speed_mps + (accel_x_mps2 - margin) * dt
+            reference = max(floor, wheel_f, wheel_r)
         else:
             reference = wheel_f  # the undriven front wheel rolls freely
         self.reference_speed_mps = reference
