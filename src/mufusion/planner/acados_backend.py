@@ -22,8 +22,10 @@ from mufusion.planner.acados_loader import (
 from mufusion.planner.front_force import front_force_rate_bound_n_per_s
 from mufusion.planner.integration import stage_steps
 from mufusion.planner.ocp import (
+    HEADING_ROWS,
     MAX_SPEED_MPS,
     N_PARAMS,
+    POLYGON_ROW_LOWER_BOUND,
     Param,
     PlannerConfig,
     constraint_expressions,
@@ -50,7 +52,7 @@ from mufusion.vehicle.planner_model import (
 )
 
 _log = logging.getLogger(__name__)
-_FORMAT_VERSION = "9"
+_FORMAT_VERSION = "12"
 
 # The problem's and the iterate's batch access compiled into the solver (acados' custom-update
 # hook). One call writes the whole problem and initial guess, one reads the whole solution,
@@ -71,8 +73,7 @@ _TEMPLATES = resources.files("mufusion.planner") / "acados_c"
 _ITERATE_HEADER = (_TEMPLATES / "mufusion_iterate.h.in").read_text(encoding="utf-8")
 _ITERATE_SOURCE = (_TEMPLATES / "mufusion_iterate.c.in").read_text(encoding="utf-8")
 
-_WRITE, _READ = 1.0, 2.0
-"""Modes of ``_ITERATE_SOURCE``."""
+_WRITE, _READ = 1.0, 2.0  # the modes of _ITERATE_SOURCE
 
 FAST_HPIPM_MODE = "SPEED"
 """HPIPM's mode for every solve: about half the QP time of ``BALANCE`` on this problem."""
@@ -98,7 +99,7 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "steering_rate_limit": config.steering_rate_limit,
             "load_transfer": config.load_transfer,
             "torque_lag": config.torque_lag,
-            "stability_envelope": config.stability_envelope,
+            "stability_envelope": config.stability_envelope, "heading_rows": config.heading_rows,
             # The parameter vector's layout (planner/ocp.py's Param).
             "n_params": N_PARAMS,
             "utilization": config.utilization_factor,
@@ -323,7 +324,8 @@ def _describe(
     model.f_expl_expr = f
     model.f_impl_expr = model.xdot - f
     model.con_h_expr = constraint_expressions(x[:N_STATES], forces, p, params, ns,
-                                             load_transfer=config.load_transfer)
+                                             load_transfer=config.load_transfer,
+                                             heading=config.heading_rows)
     ocp.model = model
     ocp.dims.N = n
     ocp.parameter_values = np.ones(N_PARAMS)
@@ -343,14 +345,10 @@ def _describe(
         vx[N_STATES + Input.fyf, layout.front_force] = 1.0
     ocp.cost.Vx, ocp.cost.Vu = vx, vu
     ocp.cost.Vx_e = np.eye(N_STATES, nx)
-    ocp.cost.W = np.eye(ny)
-    ocp.cost.W_e = np.eye(N_STATES)
-    ocp.cost.yref = np.zeros(ny)
-    ocp.cost.yref_e = np.zeros(N_STATES)
+    ocp.cost.W, ocp.cost.W_e = np.eye(ny), np.eye(N_STATES)
+    ocp.cost.yref, ocp.cost.yref_e = np.zeros(ny), np.zeros(N_STATES)
 
-    x0_example = np.zeros(nx)
-    x0_example[State.vx] = 10.0
-    ocp.constraints.x0 = x0_example
+    ocp.constraints.x0 = np.eye(nx)[State.vx] * 10.0  # an example: the solve writes x_0
     envelope = 2 * int(config.stability_envelope)  # ψ̇ and v_y, soft, written per solve
     ocp.constraints.idxbx = np.array([State.d, State.vx, State.psidot, State.vy][: 2 + envelope])
     box = np.array([[-1.0, 0.0, -10.0, -10.0], [1.0, MAX_SPEED_MPS, 10.0, 10.0]])
@@ -365,14 +363,15 @@ def _describe(
     )
     ocp.constraints.lbu, ocp.constraints.ubu = _input_bounds(params, config)
     rows = polygon_rows(ns, load_transfer=config.load_transfer)
-    ocp.constraints.lh = np.full(rows.count, rows.lower)
-    ocp.constraints.uh = np.full(rows.count, rows.upper)
+    heading = HEADING_ROWS * int(config.heading_rows)
+    ocp.constraints.lh = np.r_[np.full(rows.count, rows.lower), [POLYGON_ROW_LOWER_BOUND] * heading]
+    ocp.constraints.uh = np.r_[np.full(rows.count, rows.upper), np.zeros(heading)]
     # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
-    # follows the state, which at stage 0 is fixed, so the rear polygon is soft. acados
-    # orders a stage's slacks as the soft bounds (d, the envelope's priced as d's) first, then
-    # the soft h rows: the layout of SlackPenalties, the envelope's inserted after d's.
-    ocp.constraints.idxsh = np.arange(rows.per_axle, rows.count)
-    penalties = slack_penalties(config.weights, rows.per_axle)
+    # follows the state, which at stage 0 is fixed, so the rear polygon is soft (and the heading
+    # rows). acados orders a stage's slacks as the soft bounds (d, the envelope's priced as d's)
+    # first, then the soft h rows: SlackPenalties' layout, the envelope's inserted after d's.
+    ocp.constraints.idxsh = np.arange(rows.per_axle, rows.count + heading)
+    penalties = slack_penalties(config.weights, rows.per_axle, heading)
     l1, l2 = penalties.linear_stage, penalties.quadratic_stage
     ocp.cost.zl = ocp.cost.zu = np.insert(l1, 1, [l1[0]] * envelope)
     ocp.cost.Zl = ocp.cost.Zu = np.insert(l2, 1, [l2[0]] * envelope)

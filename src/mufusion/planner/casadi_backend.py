@@ -14,8 +14,10 @@ import numpy as np
 from mufusion.planner.front_force import front_force_rate_bound_n_per_s
 from mufusion.planner.integration import stage_steps
 from mufusion.planner.ocp import (
+    HEADING_ROWS,
     MAX_SPEED_MPS,
     N_PARAMS,
+    POLYGON_ROW_LOWER_BOUND,
     Param,
     PlannerConfig,
     constraint_expressions,
@@ -47,7 +49,8 @@ class CasadiBackend:
         self.params, self.config = params, config
         n, ns, dt = config.horizon_steps, config.polygon_sides, config.dt_s
         rows = polygon_rows(ns, load_transfer=config.load_transfer)
-        pen = slack_penalties(config.weights, rows.per_axle)
+        nh = HEADING_ROWS * int(config.heading_rows)
+        pen = slack_penalties(config.weights, rows.per_axle, nh)
         layout = ocp_state(config, params)
         nx = layout.nx
         x = ca.SX.sym("x", nx)
@@ -76,7 +79,8 @@ class CasadiBackend:
         step = ca.Function("step", [x, u, p], [xk])
         h = ca.Function("h", [x, u, p],
                         [constraint_expressions(x[:N_STATES], forces(x, u), p, params, ns,
-                                               load_transfer=config.load_transfer)])
+                                               load_transfer=config.load_transfer,
+                                               heading=config.heading_rows)])
 
         ny = N_STATES + N_INPUTS
         X = ca.SX.sym("X", nx, n + 1)
@@ -86,6 +90,8 @@ class CasadiBackend:
         # Rear-polygon slacks, stages 0..N-1, on each row's lower and upper side (as acados).
         S_rl = ca.SX.sym("S_rl", rows.per_axle, n)
         S_ru = ca.SX.sym("S_ru", rows.per_axle, n)
+        S_hl = ca.SX.sym("S_hl", nh, n)  # heading rows' slacks, likewise
+        S_hu = ca.SX.sym("S_hu", nh, n)
         P = ca.SX.sym("P", N_PARAMS, n)
         YREF = ca.SX.sym("YREF", ny, n + 1)
         WD = ca.SX.sym("WD", ny)
@@ -96,7 +102,7 @@ class CasadiBackend:
         def slack_cost(s, linear, quadratic):
             return ca.sum1(ca.DM(linear) * s + 0.5 * ca.DM(quadratic) * s**2)
 
-        corridor, rear = pen.corridor, pen.rear_polygon
+        corridor, rear, heading = pen.corridor, pen.rear_polygon, pen.heading
         cost: Any = 0
         g, lbg, ubg = [X[:, 0] - X0], [0.0] * nx, [0.0] * nx
         for k in range(n):
@@ -104,6 +110,9 @@ class CasadiBackend:
             cost += dt * 0.5 * ca.sum1(WD * r**2)
             for slack in (S_rl[:, k], S_ru[:, k]):
                 cost += dt * slack_cost(slack, pen.linear_stage[rear], pen.quadratic_stage[rear])
+            for slack in (S_hl[:, k], S_hu[:, k]) if nh else ():
+                cost += dt * slack_cost(slack, pen.linear_stage[heading],
+                                        pen.quadratic_stage[heading])
             g.append(X[:, k + 1] - step(X[:, k], U[:, k], P[:, k]))
             lbg += [0.0] * nx
             ubg += [0.0] * nx
@@ -112,12 +121,16 @@ class CasadiBackend:
             g.append(hk[:m])
             lbg += [rows.lower] * m
             ubg += [rows.upper] * m
-            g.append(hk[m:] + S_rl[:, k])
+            g.append(hk[m:2 * m] + S_rl[:, k])
             lbg += [rows.lower] * m
             ubg += [np.inf] * m
-            g.append(hk[m:] - S_ru[:, k])
+            g.append(hk[m:2 * m] - S_ru[:, k])
             lbg += [-np.inf] * m
             ubg += [rows.upper] * m
+            if nh:
+                g += [hk[2 * m:] + S_hl[:, k], hk[2 * m:] - S_hu[:, k]]
+                lbg += [POLYGON_ROW_LOWER_BOUND] * nh + [-np.inf] * nh
+                ubg += [np.inf] * nh + [0.0] * nh
             # d bounds at stage k+1 (softened); terminal slacks carry no dt factor.
             if k < n - 1:
                 scale, z1, z2 = dt, pen.linear_stage[corridor], pen.quadratic_stage[corridor]
@@ -136,7 +149,8 @@ class CasadiBackend:
         self._nx, self._layout = nx, layout
         self._n_x = nx * (n + 1)
         self._n_u = N_INPUTS * n
-        z = ca.vertcat(ca.vec(X), ca.vec(U), S_lo, S_hi, ca.vec(S_rl), ca.vec(S_ru))
+        z = ca.vertcat(ca.vec(X), ca.vec(U), S_lo, S_hi, ca.vec(S_rl), ca.vec(S_ru),
+                       ca.vec(S_hl), ca.vec(S_hu))
         par = ca.vertcat(ca.vec(P), ca.vec(YREF), WD, X0, DLO, DHI)
         self._lbg, self._ubg = np.array(lbg), np.array(ubg)
         self._n_z = z.shape[0]
@@ -151,7 +165,7 @@ class CasadiBackend:
         lbu = np.tile([-rate, lower[0], lower[1]], (n, 1))
         ubu = np.tile([rate, upper[0], upper[1]], (n, 1))
         self._lbu, self._ubu = lbu, ubu
-        self._n_slack = 2 * n + 2 * rows.per_axle * n
+        self._n_slack = 2 * n + 2 * (rows.per_axle + nh) * n
 
     def solve(self, x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi, min_speed_mps,
               max_drive_force_n=None, max_front_brake_force_n=None):

@@ -175,6 +175,11 @@ class PlannerConfig:
     # and body slip by 0.02 μ̂ g (planner/stability.py; issue 38, mechanism B; acados only;
     # on: GT 0.28-0.30 m out there where main is 0.33-0.39 m, docs/decisions/0065).
     stability_envelope: bool = False
+    # Keep the body's ends in the lane at the plan's own heading error (four soft rows per stage
+    # in the OCP, linearised at each iterate) instead of taking the guess's heading swing, up to
+    # 0.1 rad, off the reference point's bounds; not while evading (planner/corridor.py). Off:
+    # measured, not adopted (docs/decisions/0081).
+    heading_rows: bool = False
 
     def __post_init__(self) -> None:
         if self.stiffness not in STIFFNESS_MODELS:

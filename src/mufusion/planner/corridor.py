@@ -5,6 +5,7 @@ it)."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -26,6 +27,7 @@ def lateral_corridor(
     margin_m: float,
     curvature_1pm: np.ndarray | None = None,
     dt_s: float = 0.0,
+    max_swing_rad: float = MAX_SWING_HEADING_RAD,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Bounds on the reference point's ``d`` per stage 1..N, shape ``(N,)`` each.
 
@@ -42,7 +44,8 @@ def lateral_corridor(
     the problem convex, unless only the other side has room (:func:`~.passing.passing_left`,
     judged on the lane bounds and the bulge, not on the heading's swing).
     A moving obstacle is where it is predicted at each stage's time ``k · dt_s``
-    (:meth:`PlannerObstacle.s_at_stages`).
+    (:meth:`PlannerObstacle.s_at_stages`). ``max_swing_rad``: the largest heading error whose
+    swing is taken off (0: none, where :func:`heading_rows` keep the body's ends in the lane).
     """
     s_k = guess_states[1:, State.s]
     d_k = guess_states[1:, State.d]
@@ -64,7 +67,7 @@ def lateral_corridor(
     # 0.3-0.5 rad and the full swing (> 1 m each side) would close the corridor the manoeuvre
     # needs; the obstacle margin covers the corners there.
     sin_dpsi = np.sin(np.minimum(np.maximum(guess_states[1:, State.dpsi],
-                                            -MAX_SWING_HEADING_RAD), MAX_SWING_HEADING_RAD))
+                                            -max_swing_rad), max_swing_rad))
     hi = hi - a_front * np.maximum(sin_dpsi, 0.0) - a_rear * np.maximum(-sin_dpsi, 0.0)
     lo = lo + a_front * np.maximum(-sin_dpsi, 0.0) + a_rear * np.maximum(sin_dpsi, 0.0)
     # A corridor too tight for the vehicle leaves its midpoint rather than an empty interval.
@@ -78,3 +81,24 @@ def lateral_corridor(
         lo = np.where(overlap & left, np.maximum(lo, ob.d_m + clear), lo)
         hi = np.where(overlap & ~left, np.minimum(hi, ob.d_m - clear), hi)
     return lo, hi
+
+
+def heading_rows(d: Any, dpsi: Any, kappa: Any, lane_lo: Any, lane_hi: Any,
+                 params: VehicleParams) -> list[Any]:
+    """The body's front and rear ends within the lane at the plan's own heading error (CasADi).
+
+    ``e_f = d + a_f sin Δψ − κ a_f² / 2`` and ``e_r = d − a_r sin Δψ − κ a_r² / 2`` (``a_f``,
+    ``a_r``: centre of gravity to the body's front and rear; each end of a straight body sits
+    ``κ a² / 2`` outside the lane curving away from it) between the reference point's lane
+    bounds: the rows ``e − hi``, ``lo − e``, each ``≤ 0`` [m], soft and priced per metre as the
+    bound on ``d``. The solver linearises them at each iterate, so a plan trades its heading
+    against its offset and its speed, where a bound on ``d`` alone can take off only the guess's
+    swing (docs/decisions/0081).
+    """
+    import casadi as ca
+
+    swing = ca.sin(dpsi)
+    a_f, a_r = params.cog_to_body_front_m, params.cog_to_body_rear_m
+    front = d + a_f * swing - 0.5 * kappa * a_f**2
+    rear = d - a_r * swing - 0.5 * kappa * a_r**2
+    return [front - lane_hi, rear - lane_hi, lane_lo - front, lane_lo - rear]

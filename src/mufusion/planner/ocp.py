@@ -24,6 +24,7 @@ from mufusion.planner.config import PlannerMode as PlannerMode
 from mufusion.planner.config import PlannerObstacle as PlannerObstacle
 from mufusion.planner.config import PlausibilityLimits as PlausibilityLimits
 from mufusion.planner.corridor import MAX_SWING_HEADING_RAD as MAX_SWING_HEADING_RAD
+from mufusion.planner.corridor import heading_rows as heading_rows
 from mufusion.planner.corridor import lateral_corridor as lateral_corridor
 from mufusion.planner.penalties import SlackPenalties as SlackPenalties
 from mufusion.planner.penalties import slack_penalties as slack_penalties
@@ -59,9 +60,17 @@ class Param(IntEnum):
     # loads of the plan's own longitudinal forces; the radii above (at the guess's loads) then
     # only scale the rows.
     utilized_friction = 4
+    # The reference point's lane bounds at the stage [m]: the heading rows keep the body's ends
+    # within them (corridor.heading_rows); ±HEADING_ROWS_OFF_M leaves the rows slack.
+    lane_lo = 5
+    lane_hi = 6
 
 
 N_PARAMS = len(Param)
+HEADING_ROWS = 4
+"""Rows per stage that keep the body's front and rear ends in the lane (soft, one-sided, in m)."""
+HEADING_ROWS_OFF_M = 100.0
+"""Lane bounds this far out leave the heading rows slack (stage 0, evasion)."""
 
 # Range of μ̂ the planner accepts per stage; finite values outside are clipped to it (see
 # :mod:`mufusion.planner.safeguards` for non-finite ones).
@@ -146,6 +155,7 @@ def stage_parameters(
     p[:, Param.radius_rear] = radius_rear
     utilized = utilization_factor * mu
     p[:, Param.utilized_friction] = utilized
+    p[:, Param.lane_lo], p[:, Param.lane_hi] = -HEADING_ROWS_OFF_M, HEADING_ROWS_OFF_M
     brake = np.full(s_k.shape, np.inf)
     lower = mu_brake < mu
     if np.any(lower):
@@ -270,9 +280,12 @@ def polygon_rows(n_sides: int, *, load_transfer: bool) -> PolygonRows:
 
 
 def constraint_expressions(
-    x: Any, u: Any, p: Any, params: VehicleParams, n_sides: int, *, load_transfer: bool
+    x: Any, u: Any, p: Any, params: VehicleParams, n_sides: int, *, load_transfer: bool,
+    heading: bool = False,
 ) -> Any:
-    """Friction polygons normalised by their radii, as CasADi rows (bounds: :func:`polygon_rows`).
+    """Friction polygons normalised by their radii, as CasADi rows (bounds: :func:`polygon_rows`),
+    then, with ``heading``, the :data:`HEADING_ROWS` of :func:`~.corridor.heading_rows` (soft,
+    ``≤ 0`` in metres, lower bound :data:`POLYGON_ROW_LOWER_BOUND`; ``PlannerConfig.heading_rows``).
 
     Rows: the front polygon over ``(F_xf, F_yf)`` (hard), then the rear polygon over
     ``(F_xr, F_yr(x))`` (soft; see :func:`slack_penalties`). Without ``load_transfer`` the radii
@@ -291,7 +304,7 @@ def constraint_expressions(
         front = [(nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front]
                  for nx, ny in half]
         rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] for nx, ny in half]
-        return ca.vertcat(*front, *rear)
+        return ca.vertcat(*front, *rear, *(_heading_rows(x, p, params) if heading else ()))
     fzf, fzr = floored_axle_loads_n(u, params, MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2)
     limit_front = ratio * p[Param.utilized_friction] * fzf
     limit_rear = ratio * p[Param.utilized_friction] * fzr
@@ -301,7 +314,22 @@ def constraint_expressions(
     ]
     rear = [(nx * u[Input.fxr] + ny * fyr - limit_rear) / p[Param.radius_rear]
             for nx, ny in normals]
-    return ca.vertcat(*front, *rear)
+    return ca.vertcat(*front, *rear, *(_heading_rows(x, p, params) if heading else ()))
+
+
+def _heading_rows(x: Any, p: Any, params: VehicleParams) -> list[Any]:
+    return heading_rows(x[State.d], x[State.dpsi], p[Param.curvature], p[Param.lane_lo],
+                        p[Param.lane_hi], params)
+
+
+def with_lane_band(p: np.ndarray, lane_lo_m: np.ndarray, lane_hi_m: np.ndarray) -> np.ndarray:
+    """``p (N, N_PARAMS)`` with the heading rows' lane bounds of stages 1..N−1 from the reference
+    point's bounds at stages 1..N (``(N,)`` each, as :func:`lateral_corridor` returns them);
+    stage 0's rows stay slack (its state is the measured one). A copy."""
+    out = np.array(p, dtype=float)
+    out[1:, Param.lane_lo] = np.asarray(lane_lo_m, dtype=float)[:-1]
+    out[1:, Param.lane_hi] = np.asarray(lane_hi_m, dtype=float)[:-1]
+    return out
 
 
 def tracking_reference(

@@ -25,6 +25,7 @@ from mufusion.planner.ocp import (
     plan_rear_stiffness,
     stage_parameters,
     tracking_reference,
+    with_lane_band,
 )
 from mufusion.planner.plan import FallbackReason, Plan, StageParameters
 from mufusion.planner.safeguards import (
@@ -79,6 +80,11 @@ class Iterated:
     (:data:`~mufusion.planner.safeguards.SOFT_CHECKS`)."""
 
 
+LANE_BACKSTOP_M = 0.5
+"""How far outside the lane the reference point's own bound lies where the heading rows keep
+the body's ends in the lane [m]."""
+
+
 def iterate(
     backend: PlannerBackend,
     par: VehicleParams,
@@ -126,10 +132,25 @@ def iterate(
                                  cfg.utilization_factor, cfg.stiffness_table,
                                  par.torque_time_constant_s if cfg.axle_friction else None,
                                  cfg.polygon_sides)
-        d_lo, d_hi = lateral_corridor(
-            guess_x, problem.obstacles, problem.lane_d_min_m, problem.lane_d_max_m, par,
-            cfg.obstacle_margin_m, curvature_of_s(guess_x[1:, State.s]), cfg.dt_s,
-        )
+        kappa = curvature_of_s(guess_x[1:, State.s])
+        p = stage.p
+        if cfg.heading_rows and mode != "evade":
+            # The rows keep the body's ends in the lane at the plan's own heading; the bound on
+            # d keeps the obstacles, and the lane only as a backstop that cannot duplicate the
+            # rows (parallel active rows leave the QP degenerate).
+            n_stages = guess_x.shape[0] - 1
+            p = with_lane_band(p, np.full(n_stages, float(problem.lane_d_min_m)),
+                               np.full(n_stages, float(problem.lane_d_max_m)))
+            d_lo, d_hi = lateral_corridor(
+                guess_x, problem.obstacles, problem.lane_d_min_m - LANE_BACKSTOP_M,
+                problem.lane_d_max_m + LANE_BACKSTOP_M, par, cfg.obstacle_margin_m, kappa,
+                cfg.dt_s, max_swing_rad=0.0)
+        else:
+            # Evading, the heading reaches 0.3-0.5 rad: the corridor counts its swing up to
+            # MAX_SWING_HEADING_RAD and the obstacle margin covers the corners.
+            d_lo, d_hi = lateral_corridor(
+                guess_x, problem.obstacles, problem.lane_d_min_m, problem.lane_d_max_m, par,
+                cfg.obstacle_margin_m, kappa, cfg.dt_s)
         yref, weights = tracking_reference(
             cfg, stage.curvature_1pm, stage.mu_hat, mode, float(x0[State.vx]),
             speed_ref, problem.reference_d_m,
@@ -137,7 +158,7 @@ def iterate(
         status = -1
         try:
             status, xs, us = backend.solve(
-                x0, guess_x, guess_u, stage.p, yref, weights, d_lo, d_hi,
+                x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi,
                 0.0 if braking else cfg.min_speed_mps,
                 # No traction while evading or stopping: the rear tires' friction is kept
                 # for lateral force and braking. In cruise, traction is capped at a heavy

@@ -88,6 +88,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         reference_braking_fraction=cfg.planner.reference_braking_fraction,
         reference_curve_fraction=cfg.planner.reference_curve_fraction,
         stability_envelope=cfg.planner.stability_envelope,
+        heading_rows=cfg.planner.heading_rows,
         reference_regain_limit=cfg.planner.reference_regain_limit,
         steering_rate_limit=cfg.planner.steering_rate_limit,
         load_transfer=cfg.planner.load_transfer,

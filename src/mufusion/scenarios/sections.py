@@ -169,6 +169,11 @@ class PlannerSettings(_Strict):
     stability_envelope: bool = PlannerConfig.stability_envelope
     """Soft yaw-rate and body-slip bounds from μ̂ in the OCP (acados;
     :mod:`mufusion.planner.stability`, docs/decisions/0065)."""
+    heading_rows: bool = PlannerConfig.heading_rows
+    """Keep the body's ends in the lane at the plan's own heading error (two pairs of soft rows
+    per stage in the OCP; :func:`mufusion.planner.corridor.heading_rows`); off (the default:
+    measured, not adopted, docs/decisions/0081), the lane bounds the reference point less the
+    guess's heading swing."""
     reference_regain_limit: bool = PlannerConfig.reference_regain_limit
     """In cruise, the speed reference regains speed from the vehicle's own no faster than the
     drive's acceleration cap on the g-g ellipse allows (less while cornering); ``false``: the
