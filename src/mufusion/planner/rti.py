@@ -146,8 +146,9 @@ def iterate(
                 problem.lane_d_max_m + LANE_BACKSTOP_M, par, cfg.obstacle_margin_m, kappa,
                 cfg.dt_s, max_swing_rad=0.0)
         else:
-            # Evading, the heading reaches 0.3-0.5 rad: the corridor counts its swing up to
-            # MAX_SWING_HEADING_RAD and the obstacle margin covers the corners.
+            # Without the rows (the default), and while evading, the corridor counts the
+            # guess's swing up to MAX_SWING_HEADING_RAD: evading, the heading reaches 0.3-0.5
+            # rad and the obstacle margin covers the corners.
             d_lo, d_hi = lateral_corridor(
                 guess_x, problem.obstacles, problem.lane_d_min_m, problem.lane_d_max_m, par,
                 cfg.obstacle_margin_m, kappa, cfg.dt_s)
