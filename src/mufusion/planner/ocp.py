@@ -324,8 +324,8 @@ def _heading_rows(x: Any, p: Any, params: VehicleParams) -> list[Any]:
 
 def with_lane_band(p: np.ndarray, lane_lo_m: np.ndarray, lane_hi_m: np.ndarray) -> np.ndarray:
     """``p (N, N_PARAMS)`` with the heading rows' lane bounds of stages 1..N−1 from the reference
-    point's bounds at stages 1..N (``(N,)`` each, as :func:`lateral_corridor` returns them);
-    stage 0's rows stay slack (its state is the measured one). A copy."""
+    point's bounds at stages 1..N (``(N,)`` each); stage 0's rows stay slack (its state is the
+    measured one). A copy."""
     out = np.array(p, dtype=float)
     out[1:, Param.lane_lo] = np.asarray(lane_lo_m, dtype=float)[:-1]
     out[1:, Param.lane_hi] = np.asarray(lane_hi_m, dtype=float)[:-1]
