@@ -65,6 +65,7 @@ def outcomes(directory: Path, by: str | None = None) -> dict[str, dict[str, floa
         # Slip-control activity, where the runs record it (absent before it existed).
         count["gt_lock_beyond_abs_cycle"] += m.get("wheel_lock_within_abs_cycle") is False
         total["gt_slip_control_active_s"] += m.get("slip_control_active_s") or 0.0
+        total["gt_esc_active_s"] += m.get("stability_control_active_s") or 0.0
         fsafe = configs.get("F-safe")
         if fsafe is not None:
             f = fsafe["metrics"]
@@ -82,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     results = {}
     columns = ("variants", "gt_out", "gt_excursion_m", "gt_max_m", "gt_collisions",
                "fsafe_out_where_gt_in", "fsafe_hit_where_gt_clear", "gt_lock_beyond_abs_cycle",
-               "gt_slip_control_active_s")
+               "gt_slip_control_active_s", "gt_esc_active_s")
     for directory in args.directories:
         table = outcomes(directory, args.by)
         results[str(directory)] = table

@@ -37,8 +37,10 @@ TABLES = ("timeseries", "planning_steps", "plans", "estimates")
 
 
 def _run():
-    # The paper's method: the recording predates the supervisory layers.
-    overrides = ["duration_s=1.5", "probing.enabled=false", "lane_recovery.enabled=false"]
+    # The paper's method: the recording predates the supervisory layers and the vehicle's ESC
+    # (on by default since docs/decisions/0082).
+    overrides = ["duration_s=1.5", "probing.enabled=false", "lane_recovery.enabled=false",
+                 "sim.esc=false"]
     return run_scenario(load_scenario("popup", overrides), "F")
 
 

@@ -1,4 +1,4 @@
-"""Yaw stability control (ESC): when it acts, which way, how much, and that it is off by default."""
+"""Yaw stability control (ESC): when it acts, which way, how much, and that it is on by default."""
 
 from __future__ import annotations
 
@@ -15,22 +15,47 @@ def test_it_acts_only_on_a_yaw_rate_beyond_what_steering_and_cornering_explain()
     esc = YawStabilityController(TRUCK, StabilityControlSettings())
     wheelbase = TRUCK.cog_to_front_axle_m + TRUCK.cog_to_rear_axle_m
     # Turning as the steering asks (ψ̇ = v δ / L, with the lateral acceleration to match).
-    assert esc.moment(15.0, 15.0 * 0.05 / wheelbase, 0.05, 15.0**2 * 0.05 / wheelbase, 0.9) == (
-        0.0, 0.0)
+    assert esc.moment(15.0, 15.0 * 0.05 / wheelbase, 0.05, 15.0**2 * 0.05 / wheelbase, 0.9,
+                      -0.1) == (0.0, 0.0)
     # Cornering at speed with little (here slightly opposite) steering: the lateral acceleration
     # explains the yaw rate; braking against it turned the truck out of a 150 m arc (0061).
-    assert esc.moment(17.0, 0.08, -0.008, 17.0 * 0.08, 0.9) == (0.0, 0.0)
+    assert esc.moment(17.0, 0.08, -0.008, 17.0 * 0.08, 0.9, -0.1) == (0.0, 0.0)
     # Slow, or within the deadband: passive.
-    assert esc.moment(2.0, 1.0, 0.0, 0.0, 0.9) == (0.0, 0.0)
-    assert esc.moment(15.0, 0.04, 0.0, 0.0, 0.9) == (0.0, 0.0)
+    assert esc.moment(2.0, 1.0, 0.0, 0.0, 0.9, -0.1) == (0.0, 0.0)
+    assert esc.moment(15.0, 0.04, 0.0, 0.0, 0.9, -0.1) == (0.0, 0.0)
     # A right turn rotating faster than its steering and its lateral acceleration explain: a
     # moment to the left, and the braked wheel's force slows the vehicle.
-    mz, fx = esc.moment(15.0, -0.6, -0.09, -6.0, 0.9)
+    mz, fx = esc.moment(15.0, -0.6, -0.09, -6.0, 0.9, 0.1)
     assert mz > 0.0 > fx
     assert fx == pytest.approx(-mz / (0.5 * TRUCK.track_width_m))
     # Mirrored, the same magnitudes.
-    mz_left, fx_left = esc.moment(15.0, 0.6, 0.09, 6.0, 0.9)
+    mz_left, fx_left = esc.moment(15.0, 0.6, 0.09, 6.0, 0.9, -0.1)
     assert mz_left == pytest.approx(-mz) and fx_left == pytest.approx(fx)
+
+    # The same excess with the rear not swung out (body slip within the deadband, or pointing
+    # into the rotation): a steering transient, not a skid; production ESC keeps out (0082).
+    assert esc.moment(15.0, -0.6, -0.09, -6.0, 0.9, 0.04) == (0.0, 0.0)
+    assert esc.moment(15.0, -0.6, -0.09, -6.0, 0.9, -0.1) == (0.0, 0.0)
+
+
+def test_the_run_summary_says_how_long_it_acted() -> None:
+    import numpy as np
+    import pandas as pd
+
+    from mufusion.metrics.run_metrics import _wheels
+
+    n, tick = 50, 0.02
+    moment = np.zeros(n)
+    moment[10:17] = 4.0e3
+    ts = pd.DataFrame({
+        "vx_mps": np.full(n, 15.0), "body_slip_rad": np.zeros(n),
+        "wheel_slip_front": np.zeros(n), "wheel_slip_rear": np.zeros(n),
+        "slip_control_front": np.zeros(n, dtype=bool), "slip_control_rear": np.zeros(n, dtype=bool),
+        "slip_cycles": np.zeros(n, dtype=int), "esc_yaw_moment_nm": moment,
+    })
+    assert _wheels(ts, tick)["stability_control_active_s"] == pytest.approx(7 * tick)
+    # A record from before the moment was logged: nothing counted.
+    assert _wheels(ts.drop(columns="esc_yaw_moment_nm"), tick)["stability_control_active_s"] == 0.0
 
 
 def test_the_moment_is_bounded_by_the_braked_wheels_friction() -> None:
@@ -38,7 +63,7 @@ def test_the_moment_is_bounded_by_the_braked_wheels_friction() -> None:
     wheel_load = 0.5 * CAR.mass_kg * 9.81 * CAR.cog_to_rear_axle_m / (
         CAR.cog_to_front_axle_m + CAR.cog_to_rear_axle_m)
     for mu in (0.2, 0.9):
-        mz, _ = esc.moment(20.0, 2.0, 0.0, 0.0, mu)  # far beyond any target
+        mz, _ = esc.moment(20.0, 2.0, 0.0, 0.0, mu, -0.2)  # far beyond any target
         assert mz == pytest.approx(-mu * wheel_load * 0.5 * CAR.track_width_m)
 
 
@@ -51,9 +76,9 @@ def test_settings_are_checked_by_name() -> None:
         Plant(CAR, initial_state(CAR, 0.0, 0.0, 0.0, 10.0), stability_control=True)  # type: ignore[arg-type]
 
 
-def test_it_is_off_by_default_and_damps_a_spinning_plant() -> None:
-    assert load_scenario("turn").sim.stability_control() is None
-    assert load_scenario("turn", ["sim.esc=true"]).sim.stability_control() is not None
+def test_it_is_on_by_default_and_damps_a_spinning_plant() -> None:
+    assert load_scenario("turn").sim.stability_control() is not None
+    assert load_scenario("turn", ["sim.esc=false"]).sim.stability_control() is None
     # The truck at 15 m/s with a yaw rate twice what its steering asks, the steering held:
     # with ESC the yaw rate falls towards the steering's within a second, without it it does not.
     final = {}
@@ -64,5 +89,7 @@ def test_it_is_off_by_default_and_damps_a_spinning_plant() -> None:
         for _ in range(200):
             out = plant.step(ActuatorCommand(-0.09, 0.0, 0.0), 0.9, 0.9)
         final[esc is None] = (abs(float(out.x[5])), plant.stability_control_active_s)
+        if esc is None:
+            assert out.esc_yaw_moment_nm == 0.0
     assert final[True][1] == 0.0 < final[False][1]
     assert final[False][0] < final[True][0]

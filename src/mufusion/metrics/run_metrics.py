@@ -102,6 +102,9 @@ class RunMetrics:
         Cycles the vehicle's wheel-slip control (ABS, TCS) ran, both axles.
     slip_control_active_s
         Time with the slip control modulating either axle's torque [s].
+    stability_control_active_s
+        Time with the stability control (ESC) applying a yaw moment [s] (ticks whose plant step
+        had one; 0 without ESC).
     min_time_to_collision_s, min_time_to_brake_s
         Smallest time to collision and time to brake over the run [s] (along the path, constant
         velocities; braking at ``λ μ g``): :mod:`mufusion.metrics.criticality`, docs/metrics.md.
@@ -157,6 +160,7 @@ class RunMetrics:
     wheel_lock_within_abs_cycle: bool | None = None
     slip_control_cycles: int = 0
     slip_control_active_s: float = 0.0
+    stability_control_active_s: float = 0.0
     min_time_to_collision_s: float | None = None
     min_time_to_brake_s: float | None = None
     max_required_decel_mps2: float | None = None
@@ -320,6 +324,8 @@ def _wheels(ts: pd.DataFrame, tick_s: float) -> dict[str, Any]:
         "wheel_lock_within_abs_cycle": longest <= ONE_ABS_CYCLE_S,
         "slip_control_cycles": int(ts["slip_cycles"].iloc[-1]),
         "slip_control_active_s": float(active.sum() * tick_s),
+        "stability_control_active_s": float(
+            (ts["esc_yaw_moment_nm"] != 0.0).sum() * tick_s if "esc_yaw_moment_nm" in ts else 0.0),
     }
 
 

@@ -165,10 +165,12 @@ PAPER_METHOD: tuple[str, ...] = (
     "probing.enabled=false", "lane_recovery.enabled=false", "planner.curve_speed_reference=false",
     "planner.brake_first=false", "planner.steering_rate_limit=false",
     "sim.torque_compensation=false", "planner.load_transfer=false",
-    "planner.torque_lag=false",
+    "planner.torque_lag=false", "sim.esc=false",
 )
 """The paper's method: a planner that tracks the cruise speed (TAMP), without our additions that
-go beyond it: friction probing and lane recovery (:mod:`mufusion.sim.supervision`), the curve-
+go beyond it: the vehicle's yaw stability control, which the authors' plant did not have
+(:mod:`mufusion.vehicle.stability_control`, docs/decisions/0082), friction probing and lane
+recovery (:mod:`mufusion.sim.supervision`), the curve-
 and friction-aware speed reference (:mod:`mufusion.planner.speed_profile`), stopping in front
 of an obstacle where possible (:mod:`mufusion.sim.obstacle_response`) and plans whose front
 force changes no faster than the steering can turn (:mod:`mufusion.planner.front_force`),

@@ -228,10 +228,10 @@ class SimSettings(_Strict):
     production car and truck; ``false`` shows what it does."""
     tcs: bool = True
     """Traction control in the vehicle (the same controller on drive torque)."""
-    esc: bool = False
+    esc: bool = True
     """Yaw stability control in the vehicle (:mod:`mufusion.vehicle.stability_control`): a yaw
-    moment from braking one front wheel when the vehicle rotates faster than its steering asks.
-    Off by default (docs/decisions/0061)."""
+    moment from braking one front wheel when the vehicle rotates faster than its steering asks,
+    as on every production car and truck; ``false`` shows what it does (docs/decisions/0082)."""
 
     def surface_tires(self) -> SurfaceTireTable | None:
         """The plant's tire table (``None`` for the default tire)."""

@@ -112,6 +112,7 @@ class Recorder:
                 slip_torque_removed_front_nm=0.0 if slip is None else slip.front.torque_removed_nm,
                 slip_torque_removed_rear_nm=0.0 if slip is None else slip.rear.torque_removed_nm,
                 slip_cycles=0 if slip is None else slip.cycles_front + slip.cycles_rear,
+                esc_yaw_moment_nm=0.0 if last is None else last.esc_yaw_moment_nm,
             )
         )
         return status

@@ -94,6 +94,8 @@ class Tick:
     slip_torque_removed_rear_nm: float = 0.0
     slip_cycles: int = 0
     """Slip-control cycles (releases) started so far, both axles."""
+    esc_yaw_moment_nm: float = 0.0
+    """Yaw moment of the vehicle's stability control (ESC) in that step [N m] (0: passive)."""
 
 
 @dataclass(frozen=True)

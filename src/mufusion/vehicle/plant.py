@@ -349,11 +349,11 @@ class Plant:
                 x0.torque_rear_nm, self.time_s,
             )
         kernel_cmd: tuple[float, ...] = cmd
-        force_x = 0.0
+        yaw_moment = force_x = 0.0
         if self._esc is not None:
             yaw_moment, force_x = self._esc.moment(
                 math.hypot(x0.vx_mps, x0.vy_mps), x0.yaw_rate_radps, x0.steer_rad,
-                self._accel_y_mps2, mu_front)
+                self._accel_y_mps2, mu_front, math.atan2(x0.vy_mps, x0.vx_mps))
             if yaw_moment != 0.0:
                 self._esc.active_s += self.dt_s
                 kernel_cmd = (*cmd, yaw_moment, force_x)
@@ -393,4 +393,5 @@ class Plant:
             accel_x_mps2=accel_x,
             accel_y_mps2=accel_y,
             slip_control=slip_status,
+            esc_yaw_moment_nm=yaw_moment,
         )

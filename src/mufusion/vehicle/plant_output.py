@@ -32,6 +32,9 @@ class PlantOutput:
     accel_y_mps2: float
     slip_control: SlipControlStatus | None = None
     """What the wheel-slip controller (ABS, TCS) did in this step; ``None`` without one."""
+    esc_yaw_moment_nm: float = 0.0
+    """The yaw moment the stability control (ESC) applied in this step [N m] (0: passive or
+    without ESC)."""
 
     @property
     def speed_mps(self) -> float:

@@ -21,7 +21,8 @@ braked trucks that corner with little steering at speed (docs/decisions/0061). I
 vehicle's own signals only (yaw-rate sensor, steering angle, wheel-speed/IMU speed and lateral
 acceleration); the bound is the physics of the braked wheel, not something the controller knows.
 
-Off by default (``sim.esc``): docs/decisions/0061 measured it on the general grid's failures.
+On by default in scenarios (``sim.esc``; docs/decisions/0082), as in production vehicles;
+docs/decisions/0061 measured it first on the general grid's failures.
 """
 
 from __future__ import annotations
@@ -47,9 +48,14 @@ class StabilityControlSettings:
         Time in which the moment would remove the excess [s], > 0 (a brake's build-up time).
     min_speed_mps
         Below this speed the controller is passive [m/s], ≥ 0.
+    body_slip_deadband_rad
+        Body slip against the rotation (the rear swung out) below which the controller is
+        passive [rad], ≥ 0: production ESC keeps out of normal cornering, where a yaw-rate
+        excess alone is a steering transient (docs/decisions/0082).
     """
 
     yaw_rate_deadband_radps: float = 0.05
+    body_slip_deadband_rad: float = 0.05
     response_time_s: float = 0.2
     min_speed_mps: float = 3.0
 
@@ -71,9 +77,9 @@ class YawStabilityController:
     --------
     >>> from mufusion.vehicle.params import TRUCK
     >>> esc = YawStabilityController(TRUCK, StabilityControlSettings())
-    >>> esc.moment(15.0, 0.2, 3.4 * 0.2 / 15.0, 3.0, 0.9)  # turning as the steering asks
+    >>> esc.moment(15.0, 0.2, 3.4 * 0.2 / 15.0, 3.0, 0.9, 0.0)  # turning as the steering asks
     (0.0, 0.0)
-    >>> mz, fx = esc.moment(15.0, -0.6, -0.09, -6.0, 0.9)  # a right turn rotating too fast
+    >>> mz, fx = esc.moment(15.0, -0.6, -0.09, -6.0, 0.9, 0.1)  # a right turn, the rear out
     >>> mz > 0.0 > fx
     True
     """
@@ -91,15 +97,20 @@ class YawStabilityController:
 
     def moment(
         self, speed_mps: float, yaw_rate_radps: float, steer_rad: float, accel_y_mps2: float,
-        mu_front: float,
+        mu_front: float, body_slip_rad: float,
     ) -> tuple[float, float]:
         """``(yaw_moment_nm, force_x_n)`` for the coming plant step (zeros when passive).
 
         ``mu_front`` is the road's friction under the front wheels: it bounds what the braked
         wheel delivers (the plant's physics, not a signal the controller reads).
+        ``body_slip_rad`` is the estimated body slip ``atan(v_y / v_x)`` (production ESC
+        estimates it from the same sensors); the controller acts only while it points against
+        the rotation by more than ``body_slip_deadband_rad``.
         """
         cfg = self.settings
         if not speed_mps > cfg.min_speed_mps:
+            return 0.0, 0.0
+        if not -body_slip_rad * math.copysign(1.0, yaw_rate_radps) > cfg.body_slip_deadband_rad:
             return 0.0, 0.0
         explained = 0.0
         for rate in (speed_mps * steer_rad / self._wheelbase_m, accel_y_mps2 / speed_mps):
