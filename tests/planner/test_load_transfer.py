@@ -128,7 +128,8 @@ def test_the_rear_tires_keep_their_reserve_when_the_plans_count_their_load_trans
     # tires peak at 0.96, below saturation. The vehicle's ESC is off: its yaw moment on the
     # swinging body (decision 0082) would mask the planner's mechanism measured here.
     overrides = ["sim.esc=false", "initial_speed_mps=18", "friction.mu_turn=0.9",
-                 "turn.start_ahead_m=40", "turn.direction=right", "turn.clothoid_m=0", "vehicle=truck",
+                 "turn.start_ahead_m=40", "turn.direction=right", "turn.clothoid_m=0",
+                 "vehicle=truck",
                  "planner.reference_braking_fraction=1", "planner.reference_regain_limit=false",
                  "planner.torque_lag=false"]
     own = run_scenario(load_scenario("turn", overrides), "GT")
