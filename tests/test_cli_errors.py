@@ -38,6 +38,7 @@ def _said(result) -> str:
         (["run", "turn", "--set", "planner.reference_regain_limit=2"],
          "planner.reference_regain_limit"),
         (["run", "popup", "-c", "F_safe"], "'F_safe' is neither a built-in configuration"),
+        (["run", "popup", "-c", "GT", "-c", "F"], "--config: run drives one configuration, got 2"),
         (["run", "nowhere.toml"], "does not exist"),
     ],
 )

@@ -52,18 +52,18 @@ def run(
     scenario: Annotated[
         str, typer.Argument(help="Built-in scenario ('turn' or 'popup') or a scenario .toml file.")
     ],
-    config: Annotated[
-        str,
+    configs: Annotated[
+        list[str] | None,
         typer.Option(
             "--config",
             "-c",
-            help="Friction estimate the planner uses: GT (ground truth), L (local only), "
-            "P (predictive only), F (fused, paper), F-safe (fused, worst-case safe), F+shared / "
-            "F-safe+shared (also the [shared] reports file's reports), or your "
+            help="Friction estimate the planner uses (one; default F): GT (ground truth), "
+            "L (local only), P (predictive only), F (fused, paper), F-safe (fused, worst-case "
+            "safe), F+shared / F-safe+shared (also the [shared] reports file's reports), or your "
             "own as module:Class (imported from the current directory) or an entry point of "
             "mufusion.friction_sources.",
         ),
-    ] = "F",
+    ] = None,
     set_: Annotated[
         list[str] | None,
         typer.Option("--set", help="Override a scenario field, e.g. --set friction.mu=0.89."),
@@ -87,6 +87,11 @@ def run(
 
     The exit code is 0 when the run completes, also when the vehicle crashes: that is a result.
     """
+    if configs is not None and len(configs) > 1:
+        # Typer keeps the last of a repeated option: refuse rather than drop the others.
+        _fail(f"--config: run drives one configuration, got {len(configs)} "
+              f"({', '.join(configs)}); a campaign file's configs = [...] runs several")
+    config = "F" if not configs else configs[0]
     from mufusion import cli_input  # the light checks; the heavy stack after them
     try:
         cfg = cli_input.run_input(scenario, config, list(set_ or []), out, planner, controller)

@@ -13,6 +13,7 @@ from mufusion.planner.ocp import PlannerConfig
 from mufusion.planner.planner import TractionAdaptivePlanner
 from mufusion.planner.speed_profile import (
     curve_speed_reference_mps,
+    descent_limited_profile_mps,
     max_speed_profile_mps,
     regain_limited_profile_mps,
     sharpest_under_axles,
@@ -326,7 +327,9 @@ def test_the_compiled_passes_equal_the_python_loops_bit_for_bit(
     def both():
         with np.errstate(divide="ignore", invalid="ignore"):
             profile = max_speed_profile_mps(s, kappa, mu, 0.9, 20.0, braking_fraction)
-            return profile, regain_limited_profile_mps(s, kappa, mu, 0.9, profile, start, 1.5)
+            return (profile, regain_limited_profile_mps(s, kappa, mu, 0.9, profile, start, 1.5),
+                    descent_limited_profile_mps(s, kappa, mu, 0.9, profile, start + 5.0,
+                                                braking_fraction))
 
     compiled = both()
     with pytest.MonkeyPatch.context() as m:

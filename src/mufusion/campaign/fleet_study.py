@@ -74,7 +74,8 @@ def _run_facts(log: RunLog) -> dict:
 def _vehicle(cfg, configuration, seed, inbox=None) -> RunLog:
     source = make_estimator(configuration, classes=class_table(cfg.estimation.class_table),
                             length_scale_m=cfg.estimation.length_scale_m,
-                            shared=cfg.shared.settings(), inbox=inbox)
+                            shared=cfg.shared.settings(), inbox=inbox,
+                            safe_beyond_camera=cfg.estimation.safe_beyond_camera)
     return run_scenario(cfg.model_copy(update={"seed": seed}), source)
 
 

@@ -18,6 +18,7 @@ declares :attr:`~mufusion.estimators.sensors.Channel.TRUTH` is called ``step(fra
 
 from __future__ import annotations
 
+import math
 from collections.abc import Collection
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
@@ -63,6 +64,11 @@ class FrictionEstimate:
         The GP posterior on ``s_m`` (F and F-safe only).
     data : FusionData or None
         The fusion's input data (F and F-safe only).
+    unseen_mu : float or None
+        The friction the source declares possible beyond its grid's last point [-], clipped
+        into ``[MU_HAT_MIN, MU_HAT_MAX]`` as μ̂ is: the planner's speed reference keeps a curve
+        there reachable on it (docs/decisions/0084). None (the paper's configurations): the
+        last value holds there, as in the authors' TAMP framework.
     """
 
     s_m: np.ndarray
@@ -71,6 +77,7 @@ class FrictionEstimate:
     local_mu: float | None
     fused: FusedEstimate | None = None
     data: FusionData | None = None
+    unseen_mu: float | None = None
 
 
 @runtime_checkable
@@ -161,8 +168,9 @@ def step_source(
     Raises
     ------
     ValueError
-        On bad sensor inputs, or if the source's μ̂ has the wrong shape or a non-finite value
-        (the message names the source).
+        On bad sensor inputs, or if the source's μ̂ has the wrong shape or a non-finite value,
+        or its ``unseen_mu`` is not finite (the message names the source). Finite values of
+        both are clipped into ``[MU_HAT_MIN, MU_HAT_MAX]``.
     """
     channels = channels_of(source) if channels is None else channels
     frame, truth = sensors.frame(
@@ -186,9 +194,16 @@ def step_source(
             s_m=frame.s_ahead_m, mu_hat=mu_hat, local_available=frame.slip.available,
             local_mu=frame.slip.mu,
         )
+    unseen = estimate.unseen_mu
+    if unseen is not None:
+        if not math.isfinite(unseen):
+            raise ValueError(f"friction source {_label(source)!r} declared a non-finite "
+                             f"unseen_mu: {unseen!r} (None or a friction value)")
+        unseen = min(max(float(unseen), MU_HAT_MIN), MU_HAT_MAX)  # μ̂'s own bounds
     return FrictionEstimate(
         s_m=frame.s_ahead_m, mu_hat=mu_hat, local_available=estimate.local_available,
         local_mu=estimate.local_mu, fused=estimate.fused, data=estimate.data,
+        unseen_mu=unseen,
     )
 
 

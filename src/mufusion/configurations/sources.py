@@ -42,6 +42,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from mufusion.configurations.interface import (
+    MU_HAT_MIN,
     FrictionEstimate,
     FrictionEstimator,
     channels_of,
@@ -147,7 +148,12 @@ class PredictiveOnly(FrictionConfiguration):
 
 class Fused(FrictionConfiguration):
     """F / F-safe: camera and slip reports fused by GP regression (paper Sec. III); the shared
-    configurations also fuse the reports in ``inbox`` (decision 0060)."""
+    configurations also fuse the reports in ``inbox`` (decision 0060).
+
+    ``unseen_mu``: what the estimate declares possible beyond its grid
+    (:attr:`FrictionEstimate.unseen_mu`); :func:`make_estimator` gives the safe configurations
+    the lowest class minimum, the paper's F none (the last value holds, decision 0084).
+    """
 
     channels = frozenset({Channel.CAMERA_CLASSES, Channel.CAMERA_MU})
 
@@ -159,6 +165,7 @@ class Fused(FrictionConfiguration):
         s_local_m: float | None = None,
         shared: SharedSettings = DEFAULT_SHARED,
         inbox: ReportInbox | None = None,
+        unseen_mu: float | None = None,
     ) -> None:
         mode = configuration.fusion_mode
         if mode is None:
@@ -171,6 +178,7 @@ class Fused(FrictionConfiguration):
         self.s_local_m = s_local_m
         self.shared = shared
         self.inbox = inbox
+        self.unseen_mu = unseen_mu
         # The fusion's cached kernel blocks are per evaluation grid; rebuilt if the grid changes.
         self._fusion: GPFusion | None = None
 
@@ -208,7 +216,7 @@ class Fused(FrictionConfiguration):
         fused = self._fusion_on(s).step(data, self._reports(frame))
         return FrictionEstimate(
             s_m=s, mu_hat=np.asarray(fused.mu_hat, dtype=float), local_available=slip.available,
-            local_mu=slip.mu, fused=fused, data=data,
+            local_mu=slip.mu, fused=fused, data=data, unseen_mu=self.unseen_mu,
         )
 
 
@@ -220,6 +228,7 @@ def make_estimator(
     s_local_m: float | None = None,
     shared: SharedSettings = DEFAULT_SHARED,
     inbox: ReportInbox | None = None,
+    safe_beyond_camera: bool = True,
 ) -> FrictionConfiguration:
     """One of the paper's estimators on the sensor frame (GT, L, P, F, F-safe, and F+shared,
     F-safe+shared with the reports of other vehicles).
@@ -238,6 +247,10 @@ def make_estimator(
         How the shared configurations treat reports (ageing, trust test, sender cap).
     inbox : ReportInbox, optional
         The reports a shared configuration receives; None: none (it is then F or F-safe).
+    safe_beyond_camera : bool
+        A safe configuration declares the lowest class minimum (at least ``MU_HAT_MIN``)
+        beyond its grid (:attr:`FrictionEstimate.unseen_mu`, docs/decisions/0084); false: None,
+        the last value holds, as for the paper's configurations.
 
     Raises
     ------
@@ -260,8 +273,13 @@ def make_estimator(
         if not (math.isfinite(length_scale_m) and length_scale_m > 0.0):
             raise ValueError(f"length_scale_m must be finite and > 0 m, got {length_scale_m!r}")
         prior = dataclasses.replace(PAPER_PRIOR, length_scale_m=float(length_scale_m))
+    # Safe mode's promise reaches past the data: beyond the camera's range any class may lie,
+    # down to the lowest (docs/decisions/0084).
+    # (The authors' rounding scheme's lowest class starts at 0; μ̂ never goes below MU_HAT_MIN.)
+    unseen_mu = (max(min(c.mu_low for c in table), MU_HAT_MIN)
+                 if configuration.fusion_mode == "safe" and safe_beyond_camera else None)
     return Fused(configuration=configuration, prior=prior, s_local_m=s_local_m, shared=shared,
-                 inbox=inbox)
+                 inbox=inbox, unseen_mu=unseen_mu)
 
 
 class EmulatedConfiguration:

@@ -13,3 +13,12 @@ def forward_pass(
     bottom: int,
     max_accel: float,
 ) -> None: ...
+def descent_pass(
+    out: np.ndarray,
+    floor: np.ndarray,
+    kappa: np.ndarray,
+    accel: np.ndarray,
+    s: np.ndarray,
+    w: float,
+    fraction: float,
+) -> None: ...

@@ -61,3 +61,23 @@ def forward_pass(double[::1] out, const double[::1] cap, const double[::1] kappa
                 w = pmin(cap[i + 1], w + 2.0 * max_accel * sqrt(1.0 - ratio * ratio)
                          * (s[i + 1] - s[i]))
             out[i + 1] = w
+
+
+def descent_pass(double[::1] out, const double[::1] floor, const double[::1] kappa,
+                 const double[::1] accel, const double[::1] s, double w, double fraction):
+    """Writes into ``out`` the squared speeds of braking from ``w`` with what the cornering
+    leaves of ``fraction`` of the friction, never below ``floor`` (``out[0] = max(w,
+    floor[0])``)."""
+    cdef Py_ssize_t n = floor.shape[0], i
+    cdef double lateral, braking, share
+    if n == 0:
+        return
+    w = pmax(w, floor[0])
+    out[0] = w
+    with nogil:
+        for i in range(n - 1):
+            lateral = w * pmax(kappa[i], kappa[i + 1])
+            share = fraction * accel[i]
+            braking = sqrt(pmax(share * share - lateral * lateral, 0.0))
+            w = pmax(w - 2.0 * braking * (s[i + 1] - s[i]), floor[i + 1])
+            out[i + 1] = w

@@ -39,6 +39,7 @@ from mufusion.planner.plan import FallbackReason, Plan
 from mufusion.planner.rti import Iterated, StepProblem, iterate, plan_of
 from mufusion.planner.safeguards import FrictionProfile, SanitizedFriction
 from mufusion.planner.sampling import SamplingConfig, rk4_step, sampled_guess
+from mufusion.planner.speed_profile import UnseenRoad
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -234,6 +235,7 @@ class TractionAdaptivePlanner:
         lane_d_max_m: float | None = None,
         front_force_n: float | None = None,
         longitudinal_forces_n: tuple[float, float] | None = None,
+        unseen_road: UnseenRoad | None = None,
     ) -> Plan:
         """Plan from ``x0`` (Frenet state, shape (6,)) at time ``t_s`` [s].
 
@@ -270,6 +272,10 @@ class TractionAdaptivePlanner:
             The front and rear longitudinal forces [N] the wheel torques deliver now. With
             ``torque_lag`` the plan's force states start from them; ``None`` (or not finite):
             from the previous plan's forces now (planner/ocp_state.py).
+        unseen_road
+            Where the estimate behind ``mu_hat_of_s`` ends and the friction the curve speed
+            reference assumes beyond it (:class:`~mufusion.planner.speed_profile.UnseenRoad`);
+            None: ``mu_hat_of_s`` everywhere.
 
         Returns
         -------
@@ -294,6 +300,7 @@ class TractionAdaptivePlanner:
             self._obstacles(x0, obstacles, mode), reference_speed_mps, reference_d_m,
             cfg.lane_d_min_m if lane_d_min_m is None else lane_d_min_m,
             cfg.lane_d_max_m if lane_d_max_m is None else lane_d_max_m,
+            unseen_road,
         )
         started = time.perf_counter()
         guess_x, guess_u, sampled = self._guess(problem, t_s, front_force_n,

@@ -34,6 +34,7 @@ from mufusion.planner.safeguards import (
     judge_solution,
 )
 from mufusion.planner.speed_profile import (
+    UnseenRoad,
     curve_speed_reference_mps,
     lowest_under_axles,
     sharpest_under_axles,
@@ -58,6 +59,8 @@ class StepProblem:
     reference_d_m: float
     lane_d_min_m: float
     lane_d_max_m: float
+    unseen_road: UnseenRoad | None = None
+    """Where μ̂ ends and what the speed reference assumes beyond (None: μ̂ as it holds)."""
 
 
 @dataclass(frozen=True)
@@ -119,6 +122,11 @@ def iterate(
             ahead_m = (par.cog_to_front_axle_m
                        + lags * max(float(x0[State.vx]), 0.0) * par.torque_time_constant_s)
             mu_ref = lowest_under_axles(mu_of_s, par.cog_to_rear_axle_m, ahead_m)
+            # Beyond the estimate, the friction its source declares possible
+            # (docs/decisions/0084).
+            unseen = None if problem.unseen_road is None else (
+                lowest_under_axles(problem.unseen_road.cap(mu_of_s), par.cog_to_rear_axle_m,
+                                   ahead_m), max(float(x0[State.vx]), 0.0))
             kappa_ref = sharpest_under_axles(curvature_of_s, par.cog_to_rear_axle_m, ahead_m)
             speed_ref = curve_speed_reference_mps(
                 guess_x[:, State.s], kappa_ref, mu_ref, reference_speed_mps,
@@ -127,6 +135,7 @@ def iterate(
                 cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
                 (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2)
                 if cfg.reference_regain_limit and mode == "cruise" else None,
+                unseen,
             )
         stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
                                  cfg.utilization_factor, cfg.stiffness_table,

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from types import ModuleType
 
 import numpy as np
@@ -31,6 +32,9 @@ try:  # the passes compiled (bit for bit the loops below), where the install bui
     import mufusion.planner._speed_profile_c as _COMPILED
 except ImportError:  # pragma: no cover - a tree without the compiled modules
     _COMPILED = None
+
+MuOfS = Callable[[np.ndarray], np.ndarray]
+"""A friction profile over absolute progress [m] → [-]."""
 
 PROFILE_STEP_M = 1.0
 """Grid step of the profile [m]; each step brakes with its larger curvature (errs slow)."""
@@ -120,6 +124,17 @@ def max_speed_profile_mps(
     return np.sqrt(np.array(u))
 
 
+def _pass_arrays(
+    s_m: np.ndarray, curvature_1pm: np.ndarray, mu: np.ndarray, accel_fraction: float,
+    profile_mps: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The forward passes' inputs: the grid (contiguous), ``|κ|``, the friction's acceleration
+    ``accel_fraction · μ g`` and the profile's squared speeds."""
+    return (np.ascontiguousarray(s_m, dtype=float), np.abs(np.asarray(curvature_1pm, dtype=float)),
+            accel_fraction * np.asarray(mu, dtype=float) * GRAVITY_MPS2,
+            np.asarray(profile_mps, dtype=float) ** 2)
+
+
 def regain_limited_profile_mps(
     s_m: np.ndarray,
     curvature_1pm: np.ndarray,
@@ -173,10 +188,8 @@ def regain_limited_profile_mps(
     if not start_speed_mps >= 0.0 or not max_accel_mps2 > 0.0:
         raise ValueError("start_speed_mps must be >= 0 and max_accel_mps2 > 0, got "
                          f"{start_speed_mps!r} and {max_accel_mps2!r}")
-    kappa_arr = np.abs(np.asarray(curvature_1pm, dtype=float))
-    accel_arr = accel_fraction * np.asarray(mu, dtype=float) * GRAVITY_MPS2
-    s_arr = np.ascontiguousarray(s_m, dtype=float)
-    cap_arr = np.asarray(profile_mps, dtype=float) ** 2
+    s_arr, kappa_arr, accel_arr, cap_arr = _pass_arrays(s_m, curvature_1pm, mu, accel_fraction,
+                                                        profile_mps)
     cap = cap_arr.tolist()
     w = min(start_speed_mps * start_speed_mps, cap[0])
     # Where the profile ahead falls below the vehicle's speed, the way to its lowest point is a
@@ -201,6 +214,114 @@ def regain_limited_profile_mps(
             ratio = min(lateral / accel[i], 1.0)
             w = min(cap[i + 1], w + 2.0 * max_accel_mps2 * math.sqrt(1.0 - ratio * ratio)
                     * (s_list[i + 1] - s_list[i]))
+        out.append(w)
+    return np.sqrt(np.array(out))
+
+
+@dataclass(frozen=True)
+class UnseenRoad:
+    """Where the friction estimate ends and the friction the speed reference assumes beyond it.
+
+    Holding the estimate's last value there (the authors' TAMP framework) lets a vehicle arrive
+    at a curve it cannot see yet at the pace of the friction it sees: when the camera reveals
+    ice on the curve, the braking distance is gone. With the lowest friction possible beyond
+    ``from_s_m``, the reference keeps such a curve reachable from the edge of what is known, the
+    principle of driving within sight; the OCP's friction rows keep the estimate (docs/decisions/
+    0084).
+
+    Attributes
+    ----------
+    from_s_m
+        Absolute progress of the estimate's last grid point [m].
+    mu
+        Friction assumed beyond it [-] (the estimate's ``unseen_mu``).
+    """
+
+    from_s_m: float
+    mu: float
+
+    def __post_init__(self) -> None:
+        if not math.isfinite(self.from_s_m):
+            raise ValueError(f"UnseenRoad.from_s_m must be finite, got {self.from_s_m!r}")
+        if not 0.0 < self.mu <= 2.0:
+            raise ValueError(f"UnseenRoad.mu must be in (0, 2], got {self.mu!r}")
+
+    def cap(self, mu_of_s: MuOfS) -> MuOfS:
+        """``mu_of_s`` capped by :attr:`mu` beyond :attr:`from_s_m`.
+
+        Examples
+        --------
+        >>> mu = UnseenRoad(50.0, 0.1).cap(lambda s: np.full(np.shape(s), 0.8))
+        >>> mu(np.array([0.0, 50.0, 51.0])).tolist()
+        [0.8, 0.8, 0.1]
+        """
+
+        def capped(s_m: np.ndarray) -> np.ndarray:
+            s = np.asarray(s_m, dtype=float)
+            mu = np.asarray(mu_of_s(s), dtype=float)
+            return np.where(s > self.from_s_m, np.minimum(mu, self.mu), mu)
+
+        return capped
+
+
+def descent_limited_profile_mps(
+    s_m: np.ndarray,
+    curvature_1pm: np.ndarray,
+    mu: np.ndarray,
+    accel_fraction: float,
+    profile_mps: np.ndarray,
+    start_speed_mps: float,
+    braking_fraction: float,
+) -> np.ndarray:
+    """``profile_mps`` raised to where a point mass from ``start_speed_mps`` could brake to.
+
+    From the start, each grid step may lose speed with ``a_x ≤ √((b a)² − (v² |κ|)²)``,
+    ``a = accel_fraction · μ g``, ``b = braking_fraction``: what the cornering leaves of the
+    share ``b`` of the friction, so braking and cornering together never use more than that
+    share (a vehicle cornering beyond it is asked for no braking at all). A profile that falls
+    below the vehicle's speed faster than that is raised to the ramp: the reference then asks
+    for braking within the share, never for a step.
+
+    Parameters
+    ----------
+    s_m, curvature_1pm, mu, accel_fraction, braking_fraction
+        As for :func:`max_speed_profile_mps` (same grid).
+    profile_mps
+        The speeds to raise, shape (M,) [m/s].
+    start_speed_mps
+        Speed at the first grid point [m/s], ≥ 0.
+
+    Returns
+    -------
+    ndarray
+        Shape (M,) [m/s], never below ``profile_mps``.
+
+    Examples
+    --------
+    >>> s = np.arange(0.0, 4.0)
+    >>> v = descent_limited_profile_mps(s, np.zeros(4), np.full(4, 0.5), 1.0, np.full(4, 5.0),
+    ...                                 10.0, 1.0)
+    >>> [round(float(x), 3) for x in v]  # √(100 − 2·0.5·9.81·k)
+    [10.0, 9.497, 8.965, 8.401]
+    """
+    if not start_speed_mps >= 0.0:
+        raise ValueError(f"start_speed_mps must be >= 0, got {start_speed_mps!r}")
+    s_arr, kappa_arr, accel_arr, floor_arr = _pass_arrays(s_m, curvature_1pm, mu,
+                                                          accel_fraction, profile_mps)
+    if _COMPILED is not None:
+        out_arr = np.empty(floor_arr.size)
+        _COMPILED.descent_pass(out_arr, floor_arr, kappa_arr, accel_arr, s_arr,
+                               start_speed_mps * start_speed_mps, float(braking_fraction))
+        return np.sqrt(out_arr)
+    kappa, accel = kappa_arr.tolist(), accel_arr.tolist()
+    s_list, floor = s_arr.tolist(), floor_arr.tolist()
+    w = max(start_speed_mps * start_speed_mps, floor[0])
+    out = [w]
+    for i in range(len(floor) - 1):
+        lateral = w * max(kappa[i], kappa[i + 1])
+        share = braking_fraction * accel[i]
+        braking = math.sqrt(max(share * share - lateral * lateral, 0.0))
+        w = max(w - 2.0 * braking * (s_list[i + 1] - s_list[i]), floor[i + 1])
         out.append(w)
     return np.sqrt(np.array(out))
 
@@ -270,6 +391,7 @@ def curve_speed_reference_mps(
     horizon_time_s: float,
     braking_fraction: float = 1.0,
     regain: tuple[float, float] | None = None,
+    unseen: tuple[MuOfS, float] | None = None,
 ) -> np.ndarray:
     """The cruise speed capped by :func:`max_speed_profile_mps` at the stages' positions.
 
@@ -277,19 +399,37 @@ def curve_speed_reference_mps(
     stopping distance from it at the lowest μ̂ ahead (at most :data:`MAX_LOOKAHEAD_M`), so a
     curve beyond the horizon already lowers the reference of its last stages. ``regain``
     ``(start_speed_mps, max_accel_mps2)`` also caps it by :func:`regain_limited_profile_mps`
-    from the vehicle's speed at the first stage.
+    from the vehicle's speed at the first stage. ``unseen`` ``(mu_of_s, start_speed_mps)``, the
+    friction with the road beyond the estimate at its floor (:meth:`UnseenRoad.cap`), caps it
+    also by that friction's profile, lowered from the vehicle's speed no faster than
+    :func:`descent_limited_profile_mps` brakes within ``braking_fraction`` of the friction,
+    cornering included: a hypothesis about the road not yet seen asks for the braking the
+    reference's straight ramps ask for anyway, never for a step down, and never for braking
+    that leaves a plan cornering near its limit no friction for its lateral corrections
+    (docs/decisions/0084).
     """
     s0 = float(stage_s_m[0])
     coarse = s0 + np.arange(0.0, MAX_LOOKAHEAD_M + PROFILE_STEP_M, PROFILE_STEP_M)
-    mu_min = max(float(np.min(mu_hat_of_s(coarse))), 0.05)
+    mu_min = max(float(np.min((mu_hat_of_s if unseen is None else unseen[0])(coarse))), 0.05)
     reach = cruise_speed_mps * horizon_time_s + cruise_speed_mps**2 / (
         2.0 * braking_fraction * accel_fraction * mu_min * GRAVITY_MPS2)
     grid = coarse[coarse <= s0 + min(reach, MAX_LOOKAHEAD_M) + PROFILE_STEP_M]
     kappa = np.asarray(curvature_of_s(grid), dtype=float) * np.ones_like(grid)
-    # np.clip's values for these non-zero bounds, without its per-call overhead.
-    mu = np.minimum(np.maximum(np.asarray(mu_hat_of_s(grid), dtype=float), 0.05), 2.0)
-    profile = max_speed_profile_mps(grid, kappa, mu, accel_fraction, cruise_speed_mps,
-                                    braking_fraction)
+
+    def profile_on(mu_of_s: MuOfS) -> tuple[np.ndarray, np.ndarray]:
+        # np.clip's values for these non-zero bounds, without its per-call overhead.
+        mu = np.minimum(np.maximum(np.asarray(mu_of_s(grid), dtype=float), 0.05), 2.0)
+        return mu, max_speed_profile_mps(grid, kappa, mu, accel_fraction, cruise_speed_mps,
+                                         braking_fraction)
+
+    mu, profile = profile_on(mu_hat_of_s)
     if regain is not None:
         profile = regain_limited_profile_mps(grid, kappa, mu, accel_fraction, profile, *regain)
+    if unseen is not None:
+        # After the regain pass: the floor's curve is always ahead, and as the lowest point of
+        # the profile it would hold a vehicle below it at its speed for good (0044's rule is for
+        # curves that exist).
+        floor_mu, floor = profile_on(unseen[0])
+        profile = np.minimum(profile, descent_limited_profile_mps(
+            grid, kappa, floor_mu, accel_fraction, floor, unseen[1], braking_fraction))
     return np.interp(np.asarray(stage_s_m, dtype=float), grid, profile)

@@ -119,7 +119,8 @@ def run_fleet(
             inbox = make_inbox(here, section, rng)
         source = make_estimator(name, classes=classes,
                                 length_scale_m=cfg.estimation.length_scale_m,
-                                shared=section.settings(), inbox=inbox)
+                                shared=section.settings(), inbox=inbox,
+                                safe_beyond_camera=cfg.estimation.safe_beyond_camera)
         log = run_scenario(vehicle, source)
         logs.append(log)
         if on_vehicle is not None:

@@ -243,7 +243,8 @@ def _friction_source(
         inbox = scenario_inbox(cfg.shared, cfg.seed) if name.shares_reports else None
         source = make_estimator(name, classes=classes,
                                 length_scale_m=cfg.estimation.length_scale_m,
-                                shared=cfg.shared.settings(), inbox=inbox)
+                                shared=cfg.shared.settings(), inbox=inbox,
+                                safe_beyond_camera=cfg.estimation.safe_beyond_camera)
         return source, name.value
     if isinstance(friction, str):
         import_from_cwd()

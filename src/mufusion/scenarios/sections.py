@@ -124,6 +124,10 @@ class EstimationConfig(_Strict):
     """How far ahead GT (a source reading the truth) is told the true friction [m], at least
     ``camera_range_m``; ``None``: as far as the planner looks (300 m, docs/decisions/0071); the
     camera's range: as the estimators see the road."""
+    safe_beyond_camera: bool = True
+    """The safe configurations (F-safe, F-safe+shared) declare the lowest class possible beyond
+    the camera's range, and the speed reference keeps curves there reachable on it
+    (docs/decisions/0084); false: they hold the last value there, as the paper's do."""
 
     @model_validator(mode="after")
     def _truth_reaches_the_camera_range(self) -> EstimationConfig:

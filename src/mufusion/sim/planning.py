@@ -9,7 +9,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from mufusion.configurations import FrictionEstimate
-from mufusion.planner import Plan, PlannerObstacle
+from mufusion.planner import Plan, PlannerObstacle, UnseenRoad
 from mufusion.sim.components import Planner, PlanningMode
 from mufusion.sim.obstacle_response import (
     ObstacleResponse,
@@ -196,4 +196,6 @@ class Planning:
             lane_d_max_m=self.lane_bounds_m[1],
             front_force_n=self.front_force_n,
             longitudinal_forces_n=self.longitudinal_forces_n,
+            unseen_road=None if estimate.unseen_mu is None else UnseenRoad(
+                s_anchor_m + float(self.grid_m[-1]), estimate.unseen_mu),
         )
