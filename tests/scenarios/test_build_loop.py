@@ -9,7 +9,7 @@ import pytest
 from mufusion.configurations import FrictionEstimator
 from mufusion.configurations.plugins import PluginError
 from mufusion.estimators import SensorFrame, VehicleSignals
-from mufusion.planner import TrackingController
+from mufusion.planner import TrackingController, TractionAdaptivePlanner
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import WARMUP_PLANNING_STEPS, build_loop
 
@@ -107,3 +107,29 @@ def test_a_planner_plugin_without_its_protocol_is_refused_naming_it(scenario) ->
     with pytest.raises(PluginError, match=f"'{spec}' is not a planner: NotAPlanner has no "
                                           "callable restore"):
         build_loop(scenario, planner=spec)
+
+
+class OlderPlanner(TractionAdaptivePlanner):
+    """The package's planner behind the protocol's step before ``unseen_road`` existed."""
+
+    steps = 0
+
+    def step(self, x0, t_s, curvature_of_s, mu_hat_of_s, obstacles=(), mode="cruise",
+             reference_speed_mps=10.0, reference_d_m=0.0, lane_d_min_m=None, lane_d_max_m=None,
+             front_force_n=None, longitudinal_forces_n=None):
+        type(self).steps += 1
+        return super().step(x0, t_s, curvature_of_s, mu_hat_of_s, obstacles, mode,
+                            reference_speed_mps, reference_d_m, lane_d_min_m, lane_d_max_m,
+                            front_force_n, longitudinal_forces_n)
+
+
+@pytest.mark.parametrize("friction, told", [("F-safe", True), ("F", False)])
+def test_a_planner_without_unseen_road_still_plans_and_the_log_says_what_it_ignores(
+        scenario, friction, told) -> None:
+    OlderPlanner.steps = 0
+    log = build_loop(scenario, friction=friction, planner=f"{__name__}:OlderPlanner").run(
+        DURATION_S, warmup_steps=WARMUP_PLANNING_STEPS)
+    kinds = list(log.frame("events")["kind"])
+    assert OlderPlanner.steps >= len(log.planning_steps) > 0
+    assert "planner_error" not in kinds and "minimal_risk" not in kinds
+    assert kinds.count("unseen_road_ignored") == (1 if told else 0)

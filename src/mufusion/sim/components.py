@@ -16,7 +16,7 @@ from typing import Protocol
 import numpy as np
 
 from mufusion.configurations import FrictionSource
-from mufusion.planner import Plan, PlannerMemory, PlannerObstacle
+from mufusion.planner import Plan, PlannerMemory, PlannerObstacle, UnseenRoad
 from mufusion.planner.config import PlannerMode
 from mufusion.sim.settings import LoopRates  # the scenario schema reads it from there
 from mufusion.vehicle.actuators import ActuatorCommand
@@ -51,7 +51,13 @@ class Planner(Protocol):
         lane_d_max_m: float | None = None,
         front_force_n: float | None = None,
         longitudinal_forces_n: tuple[float, float] | None = None,
-    ) -> Plan: ...
+        unseen_road: UnseenRoad | None = None,
+    ) -> Plan:
+        """One plan. ``unseen_road``: where the estimate ends and what its source declares
+        beyond it (docs/decisions/0084); the loop passes it only to a step that takes it, and
+        logs once (``unseen_road_ignored``) when a source declares one to a step that does not.
+        """
+        ...
 
     @property
     def memory(self) -> PlannerMemory:

@@ -33,6 +33,9 @@ class EventKind(StrEnum):
     STOP_PROBE = "stop_probe"
     """A braking probe for a stop in lane started."""
     STOP_PROBE_END = "stop_probe_end"
+    UNSEEN_ROAD_IGNORED = "unseen_road_ignored"
+    """The friction source declares the road beyond its grid (``unseen_mu``) and the planner's
+    ``step`` takes no ``unseen_road``: its speeds cannot use it (logged once per run)."""
 
 
 ERROR_EVENTS: tuple[EventKind, ...] = (

@@ -171,7 +171,7 @@ class ClosedLoop:
         )
         self._planning = Planning(
             self.planner, self.world, self.params, grid, self.reference_speed_mps,
-            self.lane_bounds_m, self.obstacle_response, self.emergency_on_obstacle)
+            self.lane_bounds_m, self.obstacle_response, self.emergency_on_obstacle, event)
         self.plan: Plan | None = None
         self._estimation = FrictionEstimation(
             self.friction, self.sensors, self.world, self.params, grid)

@@ -4,13 +4,15 @@ rule, from the state and the obstacles of one planning step.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import inspect
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan, PlannerObstacle, UnseenRoad
 from mufusion.sim.components import Planner, PlanningMode
+from mufusion.sim.events import EventKind, EventSink
 from mufusion.sim.obstacle_response import (
     ObstacleResponse,
     follow_speed_mps,
@@ -72,6 +74,9 @@ class Planning:
         The stop-or-evade rule's settings.
     emergency_on_obstacle
         Stop (mode ``emergency``) whenever an obstacle is active, instead of the rule.
+    event
+        Where to report that the planner ignores what the estimate declares beyond its grid
+        (None: nowhere).
     """
 
     def __init__(
@@ -84,8 +89,12 @@ class Planning:
         lane_bounds_m: tuple[float, float],
         obstacle_response: ObstacleResponse,
         emergency_on_obstacle: bool,
+        event: EventSink | None = None,
     ) -> None:
         self.planner = planner
+        self._event = event
+        self._takes_unseen = _takes_keyword(planner.step, "unseen_road")
+        self._told_unseen_ignored = False
         self.world = world
         self.params = params
         self.grid_m = estimate_grid_m
@@ -183,6 +192,16 @@ class Planning:
         def mu_hat_of_s(s: np.ndarray) -> np.ndarray:
             return np.interp(np.asarray(s, dtype=float), profile_s, profile_mu)
 
+        beyond = {}
+        if estimate.unseen_mu is not None:
+            if self._takes_unseen:
+                beyond["unseen_road"] = UnseenRoad(s_anchor_m + float(self.grid_m[-1]),
+                                                   estimate.unseen_mu)
+            elif not self._told_unseen_ignored and self._event is not None:
+                self._told_unseen_ignored = True
+                self._event(t, EventKind.UNSEEN_ROAD_IGNORED,
+                            f"the estimate declares μ {estimate.unseen_mu:g} possible beyond its "
+                            "grid; the planner's step takes no unseen_road")
         return self.planner.step(
             xf,
             t,
@@ -196,6 +215,15 @@ class Planning:
             lane_d_max_m=self.lane_bounds_m[1],
             front_force_n=self.front_force_n,
             longitudinal_forces_n=self.longitudinal_forces_n,
-            unseen_road=None if estimate.unseen_mu is None else UnseenRoad(
-                s_anchor_m + float(self.grid_m[-1]), estimate.unseen_mu),
+            **beyond,
         )
+
+
+def _takes_keyword(method: Callable[..., object], name: str) -> bool:
+    """Whether ``method`` accepts the keyword ``name`` (by name or through ``**kwargs``); a
+    plug-in planner written against an older protocol may not."""
+    try:
+        parameters = inspect.signature(method).parameters.values()
+    except (TypeError, ValueError):  # no signature to read (a C callable): try it
+        return True
+    return any(p.name == name or p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters)
