@@ -6,7 +6,7 @@ from mufusion.planner.controller import ControllerGains, TrackingController
 from mufusion.planner.plan import FallbackReason, Plan
 from mufusion.planner.planner import PlannerMemory, TractionAdaptivePlanner
 from mufusion.planner.sampling import SamplingConfig
-from mufusion.planner.speed_profile import UnseenRoad
+from mufusion.planner.unseen_road import UnseenRoad
 
 __all__ = [
     "ControllerGains",

@@ -39,7 +39,7 @@ from mufusion.planner.plan import FallbackReason, Plan
 from mufusion.planner.rti import Iterated, StepProblem, iterate, plan_of
 from mufusion.planner.safeguards import FrictionProfile, SanitizedFriction
 from mufusion.planner.sampling import SamplingConfig, rk4_step, sampled_guess
-from mufusion.planner.speed_profile import UnseenRoad
+from mufusion.planner.unseen_road import UnseenRoad
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -274,7 +274,7 @@ class TractionAdaptivePlanner:
             from the previous plan's forces now (planner/ocp_state.py).
         unseen_road
             Where the estimate behind ``mu_hat_of_s`` ends and the friction the curve speed
-            reference assumes beyond it (:class:`~mufusion.planner.speed_profile.UnseenRoad`);
+            reference assumes beyond it (:class:`~mufusion.planner.unseen_road.UnseenRoad`);
             None: ``mu_hat_of_s`` everywhere.
 
         Returns

@@ -34,11 +34,11 @@ from mufusion.planner.safeguards import (
     judge_solution,
 )
 from mufusion.planner.speed_profile import (
-    UnseenRoad,
     curve_speed_reference_mps,
     lowest_under_axles,
     sharpest_under_axles,
 )
+from mufusion.planner.unseen_road import UnseenRoad
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import State, rear_lateral_force_n
 

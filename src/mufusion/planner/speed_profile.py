@@ -20,11 +20,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from types import ModuleType
 
 import numpy as np
 
+from mufusion.planner.unseen_road import MuOfS
 from mufusion.vehicle.params import GRAVITY_MPS2
 
 _COMPILED: ModuleType | None
@@ -32,9 +32,6 @@ try:  # the passes compiled (bit for bit the loops below), where the install bui
     import mufusion.planner._speed_profile_c as _COMPILED
 except ImportError:  # pragma: no cover - a tree without the compiled modules
     _COMPILED = None
-
-MuOfS = Callable[[np.ndarray], np.ndarray]
-"""A friction profile over absolute progress [m] → [-]."""
 
 PROFILE_STEP_M = 1.0
 """Grid step of the profile [m]; each step brakes with its larger curvature (errs slow)."""
@@ -216,52 +213,6 @@ def regain_limited_profile_mps(
                     * (s_list[i + 1] - s_list[i]))
         out.append(w)
     return np.sqrt(np.array(out))
-
-
-@dataclass(frozen=True)
-class UnseenRoad:
-    """Where the friction estimate ends and the friction the speed reference assumes beyond it.
-
-    Holding the estimate's last value there (the authors' TAMP framework) lets a vehicle arrive
-    at a curve it cannot see yet at the pace of the friction it sees: when the camera reveals
-    ice on the curve, the braking distance is gone. With the lowest friction possible beyond
-    ``from_s_m``, the reference keeps such a curve reachable from the edge of what is known, the
-    principle of driving within sight; the OCP's friction rows keep the estimate (docs/decisions/
-    0084).
-
-    Attributes
-    ----------
-    from_s_m
-        Absolute progress of the estimate's last grid point [m].
-    mu
-        Friction assumed beyond it [-] (the estimate's ``unseen_mu``).
-    """
-
-    from_s_m: float
-    mu: float
-
-    def __post_init__(self) -> None:
-        if not math.isfinite(self.from_s_m):
-            raise ValueError(f"UnseenRoad.from_s_m must be finite, got {self.from_s_m!r}")
-        if not 0.0 < self.mu <= 2.0:
-            raise ValueError(f"UnseenRoad.mu must be in (0, 2], got {self.mu!r}")
-
-    def cap(self, mu_of_s: MuOfS) -> MuOfS:
-        """``mu_of_s`` capped by :attr:`mu` beyond :attr:`from_s_m`.
-
-        Examples
-        --------
-        >>> mu = UnseenRoad(50.0, 0.1).cap(lambda s: np.full(np.shape(s), 0.8))
-        >>> mu(np.array([0.0, 50.0, 51.0])).tolist()
-        [0.8, 0.8, 0.1]
-        """
-
-        def capped(s_m: np.ndarray) -> np.ndarray:
-            s = np.asarray(s_m, dtype=float)
-            mu = np.asarray(mu_of_s(s), dtype=float)
-            return np.where(s > self.from_s_m, np.minimum(mu, self.mu), mu)
-
-        return capped
 
 
 def descent_limited_profile_mps(
