@@ -10,6 +10,8 @@ five), and the guess the corridor takes its side from ran into the obstacle
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -62,3 +64,16 @@ def test_an_overshoot_beyond_the_road_never_outweighs_a_deeper_overlap(
 def test_without_an_overlap_the_road_and_tracking_decide(monkeypatch: pytest.MonkeyPatch) -> None:
     far, near = _trajectory(-1.0), _trajectory(-0.82)  # both clear the obstacle
     assert _choose(monkeypatch, [far, near])[-1, State.d] == pytest.approx(-0.82)
+
+
+def test_a_diverged_candidate_is_discarded_without_a_warning(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A roll-out that blew up (its lateral offset overflowing the violation's weight) ranks last
+    # and says nothing on the terminal: a campaign's log is for its runs.
+    diverged = _trajectory(-1.0)
+    diverged[5:, State.d] = 1e306
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert _choose(monkeypatch, [diverged, _trajectory(-0.82)])[-1, State.d] == pytest.approx(
+            -0.82)

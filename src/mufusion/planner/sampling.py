@@ -355,15 +355,17 @@ def sampled_guess(
         with np.errstate(all="ignore"):
             tracking = tracking_cost(both, v_ref, d_ref)
         tracking[0] *= SHIFTED_DISCOUNT
-        road, overlap = stage_violations_m(
-            both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m, cfg.dt_s
-        )
         # Each violation by how far it goes, not by how long: the targets lie within the road,
         # so a roll-out beyond its edge is the tracking law's overshoot, which the OCP pulls
         # back; summed over the stages, a 0.16 m overshoot held for the rest of the horizon
         # outweighed a guess 0.3 m into an obstacle, and the corridor passed it on the side
-        # with no time to clear it (docs/decisions/0073).
-        cost = tracking + VIOLATION_WEIGHT * (road.max(axis=0) + overlap.max(axis=0))
+        # with no time to clear it (docs/decisions/0073). A diverged candidate's cost overflows
+        # or is NaN: it ranks last, silently.
+        with np.errstate(all="ignore"):
+            road, overlap = stage_violations_m(
+                both, obstacles, lo_lane, hi_lane, par, cfg.obstacle_margin_m, cfg.dt_s
+            )
+            cost = tracking + VIOLATION_WEIGHT * (road.max(axis=0) + overlap.max(axis=0))
         cost = np.where(np.isfinite(cost), cost, np.inf)
         best = int(np.argmin(cost))
         if best == 0 or not np.isfinite(cost[best]):
