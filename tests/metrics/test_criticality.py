@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
 from factories import estimate_grid, run_meta, ticks
 from mufusion.metrics import compute_metrics
-from mufusion.metrics.criticality import criticality, criticality_summary
+from mufusion.metrics.criticality import (
+    criticality,
+    criticality_summary,
+    required_deceleration_mps2,
+    time_to_collision_s,
+)
 from mufusion.sim.log import RunLog
 from mufusion.sim.records import ObstacleTrace
 
@@ -92,3 +99,11 @@ def test_the_front_edge_decides_whether_the_obstacle_is_in_the_path() -> None:
 
     assert ttc(0.0) is not None
     assert ttc(0.3) is None
+
+
+def test_a_vanishing_closing_speed_or_gap_gives_inf_without_a_warning() -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert time_to_collision_s(np.array([30.0]), np.array([1e-310])).tolist() == [np.inf]
+        assert required_deceleration_mps2(np.array([1e-310]), np.array([1e200])).tolist() == [
+            np.inf]

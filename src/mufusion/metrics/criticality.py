@@ -44,7 +44,9 @@ def time_to_collision_s(gap_m: np.ndarray, closing_speed_mps: np.ndarray) -> Flo
     """
     gap, rel = np.broadcast_arrays(np.asarray(gap_m, float), np.asarray(closing_speed_mps, float))
     closing = np.isfinite(gap) & (rel > 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    # np.where computes both branches; a closing speed of a few ulp overflows to inf, which is
+    # the time it gives.
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         ttc = np.where(closing, np.maximum(gap, 0.0) / rel, np.inf)
     return ttc.astype(float)
 
@@ -66,7 +68,7 @@ def required_deceleration_mps2(gap_m: np.ndarray, closing_speed_mps: np.ndarray)
     """
     gap, rel = np.broadcast_arrays(np.asarray(gap_m, float), np.asarray(closing_speed_mps, float))
     closing = np.isfinite(gap) & (rel > 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         need = np.where(gap > 0.0, rel**2 / (2.0 * gap), np.inf)
     return np.where(closing, need, 0.0).astype(float)
 
