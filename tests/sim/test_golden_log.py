@@ -6,7 +6,11 @@ Every recorded column must come out the same to the files' precision: nine signi
 (a value at a rounding edge may move by one unit in the ninth digit: rtol 2e-8), and 1e-7 of the
 column's scale: floating-point noise in the inputs (a reordered sum in the fusion, a closed-form
 path frame) comes out of the QP solver amplified to that order; a behaviour change moves values
-by percent. The planned braking split is compared as its sum: the cost weighs front and rear
+by percent. The plans get 1e-4 of the scale: their later stages are the QP's iterate, settled
+only to the solver's tolerances, and another NumPy / SciPy build moved three planned values of
+one plan by up to 2.2e-5 of the scale (a front lateral force, by 1 N of 47 kN; fresh install
+with NumPy 2.4.6, SciPy 1.17.1) while the closed loop's time series stayed within 1e-10.
+The planned braking split is compared as its sum: the cost weighs front and rear
 longitudinal forces alike, so while neither friction polygon binds the optimum is flat along the
 split and the solver may land anywhere on it at floating-point noise (the total, which moves the
 vehicle, is unique). New columns may be added. The recording's torque columns are the
@@ -34,6 +38,8 @@ from mufusion.scenarios.runner import run_scenario
 
 GOLDEN = Path(__file__).resolve().parents[1] / "data" / "golden_popup_F"
 TABLES = ("timeseries", "planning_steps", "plans", "estimates")
+ATOL_OF_SCALE = {"plans": 1e-4}
+"""Absolute tolerance per table as a share of each column's scale (1e-7 where not listed)."""
 
 
 def _run():
@@ -68,7 +74,8 @@ def test_log_matches_the_recorded_run(log, table: str) -> None:
         if want.dtype.kind in "fiu":
             scale = max(1.0, float(np.nanmax(np.abs(want.to_numpy(float)), initial=0.0)))
             np.testing.assert_allclose(
-                got.to_numpy(float), want.to_numpy(float), rtol=2e-8, atol=1e-7 * scale,
+                got.to_numpy(float), want.to_numpy(float), rtol=2e-8,
+                atol=ATOL_OF_SCALE.get(table, 1e-7) * scale,
                 err_msg=f"{table}.{column}",
             )
         else:

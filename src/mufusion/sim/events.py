@@ -30,6 +30,9 @@ class EventKind(StrEnum):
     """μ̂ was relaxed towards the posterior mean to keep the lane, or that did not help."""
     FUTILE_EVASION = "futile_evasion"
     """Every evasion hits the obstacle: braking in lane instead."""
+    EVASION_AT_UPPER_EDGE = "evasion_at_upper_edge"
+    """Every evasion up to the estimates' central value hits the obstacle and one at the
+    posterior's upper 95 % edge passes it: that one is driven."""
     STOP_PROBE = "stop_probe"
     """A braking probe for a stop in lane started."""
     STOP_PROBE_END = "stop_probe_end"

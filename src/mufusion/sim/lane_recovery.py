@@ -14,7 +14,7 @@ import numpy as np
 
 from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan
-from mufusion.sim.components import Planner, PlanningMode
+from mufusion.sim.components import Planner, PlannerMemory, PlanningMode
 from mufusion.sim.events import EventKind, EventSink
 from mufusion.sim.settings import LaneRecoverySettings
 from mufusion.sim.supervision import (
@@ -43,6 +43,9 @@ class RecoveryOutcome(StrEnum):
     """The lane is kept with one step less of the held relaxation, which is adopted."""
     BRAKING = "braking"
     """Every evasion hits the obstacle: the stop in lane is adopted."""
+    UPPER_EDGE = "upper_edge"
+    """Every candidate hits the obstacle and the evasion at the posterior's upper 95 % edge
+    passes it: that one is adopted (an ``evasion_at_upper_edge`` event)."""
 
 
 @dataclass(frozen=True)
@@ -74,6 +77,9 @@ class LaneRecovery(Supervisor):
         The road's curvature [1/m] at arc lengths [m].
     event
         Where the outcomes are reported.
+    obstacle_margin_m
+        The gap to an obstacle the planner is asked to keep [m]: evading, a plan that passes
+        closer is searched on like one that leaves the lane (docs/decisions/0085).
     """
 
     def __init__(
@@ -84,8 +90,10 @@ class LaneRecovery(Supervisor):
         lane_bounds_m: tuple[float, float],
         curvature: Callable[[np.ndarray], np.ndarray],
         event: EventSink,
+        obstacle_margin_m: float = 0.0,
     ) -> None:
         self.settings = settings
+        self.obstacle_margin_m = obstacle_margin_m
         self.planner = planner
         self.params = params
         self.lane_bounds_m = lane_bounds_m
@@ -96,6 +104,8 @@ class LaneRecovery(Supervisor):
         self.recoveries: list[Recovery] = []
         """Each step's outcome where lane recovery acted, in order."""
         self._gain: tuple[FrictionEstimate, np.ndarray | None] | None = None
+        self._upper_edge_plan: tuple[Plan, PlannerMemory, float] | None = None
+        """The futile-evasion check's plan where it passed: (plan, planner memory, gap [m])."""
 
     def _relaxed(self, estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
         """:func:`~mufusion.sim.supervision.relaxed_estimate`, with the gain computed once per
@@ -156,8 +166,15 @@ class LaneRecovery(Supervisor):
         before = self.footprint_violation_m(plan)
         alphas = (0.0, *self.settings.steps)
         t = ctx.t_s
+        # Evading, a plan that passes the obstacle closer than the margin its OCP keeps has met
+        # its friction limit as one leaving the lane has: relaxing μ̂ only until the plan
+        # scrapes past (by 0-8 cm) chose, at every step, the evasion that procrastinates, and the
+        # car hit what a plan at the estimates' central value would have passed
+        # (docs/decisions/0085).
+        shortfall = self._obstacle_shortfall_m(ctx, mode)
+        short = not plan.fallback and shortfall(plan) > 0.0
         # No friction-limited plan at all (the solve failed) counts as not keeping the lane.
-        if before <= tolerance and not plan.fallback and not futile:
+        if before <= tolerance and not plan.fallback and not futile and not short:
             if held == 0.0:
                 return plan, estimate
             # The lane is kept with the relaxation held: try one step less of it, so that the
@@ -188,10 +205,18 @@ class LaneRecovery(Supervisor):
         # tried, not the one the controller tracks.
         # A plan predicted to hit an obstacle is never preferred to one predicted to pass it,
         # however much further the latter leaves the lane (evading, the road band).
-        def rank(candidate: Plan, violation: float) -> tuple[bool, float]:
+        # Then the band's violation beyond the tolerance; among the candidates within it, one
+        # short of its share of the obstacle margin after every one that keeps it. A plan
+        # leaving the band (evading, the road) is not made to leave it further for the margin:
+        # measured, that put two marginal pop-ups of limits_popup off the road.
+        def rank(candidate: Plan, violation: float) -> tuple[bool, float, bool, float, float]:
             hits = planned_obstacle_hit(candidate.states, ctx.obstacles, self.params,
                                         candidate.dt_s)
-            return (hits, np.inf if candidate.fallback else violation)
+            if candidate.fallback:
+                return (hits, np.inf, True, np.inf, np.inf)
+            gap_short = shortfall(candidate)
+            return (hits, max(violation - tolerance, 0.0), gap_short > 0.0, violation,
+                    gap_short)
 
         best = (rank(plan, before), before, plan, planned_with, held, self.planner.memory)
         for alpha in (a for a in alphas if a > held):
@@ -202,20 +227,34 @@ class LaneRecovery(Supervisor):
             key = rank(candidate, violation)
             if not candidate.fallback and key < best[0]:
                 best = (key, violation, candidate, relaxed, alpha, self.planner.memory)
-            if not candidate.fallback and violation <= tolerance and not key[0]:
+            if not candidate.fallback and violation <= tolerance and not (key[0] or key[2]):
                 break
-        (every_one_hits, _), violation, plan, adopted, alpha, memory = best
+        (every_one_hits, *_), violation, plan, adopted, alpha, memory = best
         self.planner.restore(memory)
         if mode == "evade" and every_one_hits and self.settings.brake_when_futile:
-            braking = self._brake_if_futile(ctx, estimate, plausible_estimate(estimate))
+            top = plausible_estimate(estimate)
+            braking = self._brake_if_futile(ctx, estimate, top)
             if braking is not None:
                 self.alpha = 0.0
                 self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, held))
                 return braking, estimate
+            if self._upper_edge_plan is not None and top is not None:
+                # The check passes where every candidate hits: the evasion the posterior allows
+                # is the one to drive, not a candidate predicted to hit (docs/decisions/0086).
+                self.planner.restore(self._upper_edge_plan[1])
+                self.alpha = 0.0
+                self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.UPPER_EDGE, 1.0, held))
+                self._event(
+                    ctx.t_s, EventKind.EVASION_AT_UPPER_EDGE,
+                    "every evasion up to the estimates' central value hits the obstacle; evading "
+                    "with μ̂ at the posterior's upper 95 % edge, which passes it "
+                    f"({self._upper_edge_plan[2]:.2f} m)")
+                return self._upper_edge_plan[0], top
         self.alpha = alpha if hold else 0.0
         problem = "no friction-limited plan" if plan.fallback and alpha == 0.0 else (
-            "the friction-limited plan failed" if alpha > 0.0 and before <= tolerance
-            else f"the plan left the lane by {before:.2f} m"
+            f"the plan left the lane by {before:.2f} m" if before > tolerance
+            else "the evasion passes the obstacle within its margin" if short and not futile
+            else "the friction-limited plan failed"
         )
         held_note = f" (from {held:.2f} held)" if held > 0.0 else ""
         outcome = RecoveryOutcome.RELAXED if alpha > 0.0 else RecoveryOutcome.DID_NOT_HELP
@@ -239,10 +278,13 @@ class LaneRecovery(Supervisor):
         candidate) when that evasion passes, or when either plan fails.
         """
         memory = self.planner.memory
+        self._upper_edge_plan = None
         if top is not None:
             check = ctx.plan(top, "evade")
             gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params,
                                                check.dt_s)
+            if not check.fallback and gap >= 0.0 and self.settings.evade_at_upper_edge:
+                self._upper_edge_plan = (check, self.planner.memory, gap)
             if not check.fallback and gap < 0.0:
                 brake = ctx.plan(estimate, "emergency")
                 if not brake.fallback:
@@ -253,6 +295,23 @@ class LaneRecovery(Supervisor):
                     return brake
         self.planner.restore(memory)
         return None
+
+    def _obstacle_shortfall_m(
+        self, ctx: PlanningContext, mode: PlanningMode
+    ) -> Callable[[Plan], float]:
+        """How far a plan of this step passes closer to the obstacles than the share of the
+        margin it must keep (``obstacle_margin_share``) [m]: 0 for one that keeps it, and
+        always 0 unless evading (a stop's gap is the braking's)."""
+        margin = self.settings.obstacle_margin_share * self.obstacle_margin_m
+        if mode != "evade" or not ctx.obstacles or margin <= 0.0:
+            return lambda plan: 0.0
+
+        def shortfall(plan: Plan) -> float:
+            gap = planned_obstacle_clearance_m(plan.states, ctx.obstacles, self.params,
+                                               plan.dt_s)
+            return max(0.0, margin - gap)
+
+        return shortfall
 
     def footprint_violation_m(self, plan: Plan) -> float:
         """How far ``plan``'s predicted footprint leaves the lane [m] (0 inside)."""

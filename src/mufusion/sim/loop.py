@@ -164,7 +164,7 @@ class ClosedLoop:
         self.supervision = Supervision(
             StopInLane(self.lane_recovery, event),
             LaneRecovery(self.lane_recovery, self.planner, self.params, self.lane_bounds_m,
-                         self.world.curvature, event),
+                         self.world.curvature, event, self.obstacle_response.margin_m),
             Probing(self.probing, self.utilization_factor, self.params, grid,
                     self.world.curvature, event),
             MinimalRisk(self.safety, self.params, event),

@@ -103,6 +103,15 @@ class LaneRecoverySettings:
     # Evading, when every candidate and a plan at the posterior's upper 95 % edge hit the
     # obstacle: brake in lane instead (see the module docstring).
     brake_when_futile: bool = True
+    # Evading, when every candidate hits the obstacle and the plan at the posterior's upper
+    # 95 % edge passes it: drive that plan, not a candidate predicted to hit (0086).
+    evade_at_upper_edge: bool = True
+    # Evading, the share of the planner's obstacle margin a plan must keep: one passing closer
+    # has met its friction limit and is searched on like one leaving the lane. Plans at the
+    # estimate's limit keep their corridor's gap to within centimetres (0.44-0.46 m of 0.5 m
+    # measured), so half of it separates those from the plans that only scrape past
+    # (docs/decisions/0085). 0: only a plan that hits is searched on (as before).
+    obstacle_margin_share: float = 0.5
     # Long enough for the brakes' lag and the local estimator's buffer at 10 Hz planning, short
     # enough that an evasion from the probe's end stays within reach of one from its start.
     stop_probe_s: float = 0.3
@@ -111,6 +120,15 @@ class LaneRecoverySettings:
         if not isinstance(self.brake_when_futile, bool):
             raise ValueError("lane_recovery.brake_when_futile must be true or false, "
                              f"got {self.brake_when_futile!r}")
+        if not isinstance(self.evade_at_upper_edge, bool):
+            raise ValueError("lane_recovery.evade_at_upper_edge must be true or false, "
+                             f"got {self.evade_at_upper_edge!r}")
+        if not (math.isfinite(self.obstacle_margin_share)
+                and 0.0 <= self.obstacle_margin_share <= 1.0):
+            raise ValueError(
+                "lane_recovery.obstacle_margin_share must be finite and in [0, 1] (a share of "
+                f"the planner's obstacle margin), got {self.obstacle_margin_share!r}"
+            )
         if not (math.isfinite(self.stop_probe_s) and 0.0 <= self.stop_probe_s <= 1.0):
             raise ValueError(
                 "lane_recovery.stop_probe_s must be finite and in [0, 1] s (0: no braking "

@@ -66,13 +66,20 @@ docs/decisions/0027, "F-safe's lane in the pop-up").
 
 **Braking when the evasion is futile** (``brake_when_futile``). Evading, lane recovery ranks a
 candidate predicted to hit an obstacle (:func:`planned_obstacle_clearance_m`) after every one
-predicted to pass it. When every candidate hits, one more plan is made with μ̂ at the upper edge
-of the posterior's 95 % band (:func:`plausible_estimate`), as a check only: if it hits too, no
-evasion the posterior allows passes the obstacle, and the vehicle brakes in lane with the
-unrelaxed μ̂ (the planner's emergency mode) to lower the impact speed, logged as
-``futile_evasion``. The check is made afresh at each planning step. An evasion inside the band it
-may use (the road) that is predicted to hit is reviewed the same way; without a posterior (GT, L,
-P) the check re-plans the evasion with μ̂ itself (docs/decisions/0062).
+predicted to pass it, and one passing closer than ``obstacle_margin_share`` of the planner's
+obstacle margin after every one that keeps it, searching on past it: relaxed only until its
+plans stopped hitting, the loop adopted at each step an evasion scraping past at its friction
+limit, and the vehicle, turning away on a fraction of the road's friction, hit
+(docs/decisions/0085). When every candidate hits, one more plan is made with μ̂ at the upper
+edge of the posterior's 95 % band (:func:`plausible_estimate`): if it hits too, no evasion the
+posterior allows passes the obstacle, and the vehicle brakes in lane with the unrelaxed μ̂ (the
+planner's emergency mode) to lower the impact speed, logged as ``futile_evasion``; if it passes,
+that evasion is driven (``evade_at_upper_edge``, logged as ``evasion_at_upper_edge``): every plan
+with less friction is predicted to hit, and keeping one of them drove into the obstacle
+(docs/decisions/0086). The check is made afresh at each planning step. An evasion inside the
+band it may use (the road) that is predicted to hit is reviewed the same way; without a
+posterior (GT, L, P) the check re-plans the evasion with μ̂ itself and only its braking applies
+(docs/decisions/0062).
 
 The loop runs them as its supervisors (:class:`~mufusion.sim.supervisor.Supervisor`):
 :class:`~mufusion.sim.stop_in_lane.StopInLane`, :class:`~mufusion.sim.lane_recovery.LaneRecovery`
