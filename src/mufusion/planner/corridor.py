@@ -35,7 +35,10 @@ def lateral_corridor(
     shrunk the lane or road edges by half the vehicle width, TAMP framework). On a curve of
     curvature κ (``curvature_1pm`` at the stages' predicted positions) the body's ends, aligned
     with the lane at its middle, stick out of the curve by ``|κ| (l/2)² / 2``; that much is taken
-    off the outer bound (right of a left curve, left of a right curve). A heading error Δψ (the
+    off the outer bound (right of a left curve, left of a right curve). Exact for a body centred
+    on the reference point; the truck's rear end, 3.63 m behind it, sticks out by up to
+    ``|κ| · 1.67 m²`` more, inside the lane's 0.1 m footprint margin above a 17 m radius (each
+    end's own term measured and not adopted: docs/decisions/0087). A heading error Δψ (the
     guess's, as RTI linearises there) swings the front corners by ``a_f sin Δψ`` and the rear ones
     by ``a_r sin Δψ`` the other way (``a_f``, ``a_r``: CoG to the body's front and rear); the
     bounds shrink by that too. An obstacle
