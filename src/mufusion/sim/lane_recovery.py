@@ -14,7 +14,7 @@ import numpy as np
 
 from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan
-from mufusion.sim.components import Planner, PlannerMemory, PlanningMode
+from mufusion.sim.components import Planner, PlanningMode
 from mufusion.sim.events import EventKind, EventSink
 from mufusion.sim.settings import LaneRecoverySettings
 from mufusion.sim.supervision import (
@@ -104,8 +104,6 @@ class LaneRecovery(Supervisor):
         self.recoveries: list[Recovery] = []
         """Each step's outcome where lane recovery acted, in order."""
         self._gain: tuple[FrictionEstimate, np.ndarray | None] | None = None
-        self._upper_edge_plan: tuple[Plan, PlannerMemory, float] | None = None
-        """The futile-evasion check's plan where it passed: (plan, planner memory, gap [m])."""
 
     def _relaxed(self, estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
         """:func:`~mufusion.sim.supervision.relaxed_estimate`, with the gain computed once per
@@ -155,10 +153,9 @@ class LaneRecovery(Supervisor):
         if self._relaxed(estimate, 1.0) is None:
             self.alpha = 0.0
             if futile:
-                braking = self._brake_if_futile(ctx, estimate, estimate)
-                if braking is not None:
-                    self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, 0.0))
-                    return braking, estimate
+                decided = self._when_every_evasion_hits(ctx, estimate, estimate, held=0.0)
+                if decided is not None:
+                    return decided
             return plan, estimate
         planned_with = self._relaxed(estimate, held) if held > 0.0 else estimate
         assert planned_with is not None
@@ -166,11 +163,11 @@ class LaneRecovery(Supervisor):
         before = self.footprint_violation_m(plan)
         alphas = (0.0, *self.settings.steps)
         t = ctx.t_s
-        # Evading, a plan that passes the obstacle closer than the margin its OCP keeps has met
-        # its friction limit as one leaving the lane has: relaxing μ̂ only until the plan
-        # scrapes past (by 0-8 cm) chose, at every step, the evasion that procrastinates, and the
-        # car hit what a plan at the estimates' central value would have passed
-        # (docs/decisions/0085).
+        # Evading, a plan that passes the obstacle closer than its share of the margin its OCP
+        # keeps has met its friction limit as one leaving the lane has: relaxing μ̂ only until
+        # the plan scraped past (by 0-8 cm) chose, at every step, the evasion that
+        # procrastinates, and the car hit what a plan at the estimates' central value would have
+        # passed (docs/decisions/0085).
         shortfall = self._obstacle_shortfall_m(ctx, mode)
         short = not plan.fallback and shortfall(plan) > 0.0
         # No friction-limited plan at all (the solve failed) counts as not keeping the lane.
@@ -232,24 +229,11 @@ class LaneRecovery(Supervisor):
         (every_one_hits, *_), violation, plan, adopted, alpha, memory = best
         self.planner.restore(memory)
         if mode == "evade" and every_one_hits and self.settings.brake_when_futile:
-            top = plausible_estimate(estimate)
-            braking = self._brake_if_futile(ctx, estimate, top)
-            if braking is not None:
+            decided = self._when_every_evasion_hits(ctx, estimate, plausible_estimate(estimate),
+                                                    held)
+            if decided is not None:
                 self.alpha = 0.0
-                self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, held))
-                return braking, estimate
-            if self._upper_edge_plan is not None and top is not None:
-                # The check passes where every candidate hits: the evasion the posterior allows
-                # is the one to drive, not a candidate predicted to hit (docs/decisions/0086).
-                self.planner.restore(self._upper_edge_plan[1])
-                self.alpha = 0.0
-                self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.UPPER_EDGE, 1.0, held))
-                self._event(
-                    ctx.t_s, EventKind.EVASION_AT_UPPER_EDGE,
-                    "every evasion up to the estimates' central value hits the obstacle; evading "
-                    "with μ̂ at the posterior's upper 95 % edge, which passes it "
-                    f"({self._upper_edge_plan[2]:.2f} m)")
-                return self._upper_edge_plan[0], top
+                return decided
         self.alpha = alpha if hold else 0.0
         problem = "no friction-limited plan" if plan.fallback and alpha == 0.0 else (
             f"the plan left the lane by {before:.2f} m" if before > tolerance
@@ -267,32 +251,43 @@ class LaneRecovery(Supervisor):
         )
         return plan, adopted
 
-    def _brake_if_futile(
-        self, ctx: PlanningContext, estimate: FrictionEstimate, top: FrictionEstimate | None
-    ) -> Plan | None:
-        """The stop in lane, if an evasion planned with ``top`` also hits.
+    def _when_every_evasion_hits(
+        self, ctx: PlanningContext, estimate: FrictionEstimate, top: FrictionEstimate | None,
+        held: float,
+    ) -> tuple[Plan, FrictionEstimate] | None:
+        """The plan to drive when every lane-recovery candidate is predicted to hit an obstacle,
+        or None to continue the best candidate.
 
-        Called when every lane-recovery candidate is predicted to hit an obstacle; ``estimate``
-        is unrelaxed, ``top`` the most friction it allows (the posterior's upper 95 % edge, or
-        μ̂ itself without a posterior). Returns None (and the planner continues the adopted
-        candidate) when that evasion passes, or when either plan fails.
+        ``estimate`` is unrelaxed, ``top`` the most friction it allows (the posterior's upper
+        95 % edge, or μ̂ itself without a posterior). An evasion planned with ``top`` decides:
+        if it hits too, the stop in lane (``futile_evasion``); if it passes and ``top`` is more
+        than μ̂ (a posterior's edge), that evasion (``evasion_at_upper_edge``, with
+        ``evade_at_upper_edge``). None when either plan fails, or without a posterior when the
+        re-planned evasion passes.
         """
         memory = self.planner.memory
-        self._upper_edge_plan = None
-        if top is not None:
-            check = ctx.plan(top, "evade")
-            gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params,
-                                               check.dt_s)
-            if not check.fallback and gap >= 0.0 and self.settings.evade_at_upper_edge:
-                self._upper_edge_plan = (check, self.planner.memory, gap)
-            if not check.fallback and gap < 0.0:
-                brake = ctx.plan(estimate, "emergency")
-                if not brake.fallback:
-                    self._event(
-                        ctx.t_s, EventKind.FUTILE_EVASION,
-                        f"every evasion hits the obstacle, with the most friction the estimate "
-                        f"allows too ({gap:.2f} m); braking in lane")
-                    return brake
+        if top is None:
+            return None
+        check = ctx.plan(top, "evade")
+        gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params, check.dt_s)
+        if not check.fallback and gap < 0.0:
+            brake = ctx.plan(estimate, "emergency")
+            if not brake.fallback:
+                self._event(
+                    ctx.t_s, EventKind.FUTILE_EVASION,
+                    f"every evasion hits the obstacle, with the most friction the estimate "
+                    f"allows too ({gap:.2f} m); braking in lane")
+                self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, held))
+                return brake, estimate
+        elif not check.fallback and top is not estimate and self.settings.evade_at_upper_edge:
+            # Nothing with less friction passes: the evasion the posterior allows is the one to
+            # drive, not a candidate predicted to hit (docs/decisions/0086).
+            self._event(
+                ctx.t_s, EventKind.EVASION_AT_UPPER_EDGE,
+                "every evasion up to the estimates' central value hits the obstacle; evading "
+                f"with μ̂ at the posterior's upper 95 % edge, which passes it ({gap:.2f} m)")
+            self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.UPPER_EDGE, 1.0, held))
+            return check, top
         self.planner.restore(memory)
         return None
 
