@@ -41,7 +41,7 @@ class FaultyBackend:
         self.last_solve_retried = False  # the inner backend's, for the solves it ran
 
     def solve(self, x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi, min_speed_mps,
-              max_drive_force_n=None, max_front_brake_force_n=None):
+              max_drive_force_n=None, max_front_brake_force_n=None, max_speed_mps=None):
         self.last_solve_retried = False
         if self.mode == "raise":
             raise RuntimeError("injected")
@@ -51,7 +51,7 @@ class FaultyBackend:
             p = np.full_like(p, np.nan)
         status, xs, us = self.inner.solve(x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi,
                                           min_speed_mps, max_drive_force_n,
-                                          max_front_brake_force_n)
+                                          max_front_brake_force_n, max_speed_mps)
         self.last_solve_retried = self.inner.last_solve_retried
         if self.mode == "times1000":
             us = 1000.0 * us

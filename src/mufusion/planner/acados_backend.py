@@ -52,19 +52,11 @@ from mufusion.vehicle.planner_model import (
 )
 
 _log = logging.getLogger(__name__)
-_FORMAT_VERSION = "12"
+_FORMAT_VERSION = "13"
 
 # The problem's and the iterate's batch access compiled into the solver (acados' custom-update
-# hook). One call writes the whole problem and initial guess, one reads the whole solution,
-# where the wrapper's set/get take one call per stage and field (≈ 300 per solve).
-# ``data[0]`` is the mode:
-#   1  write ``[1, x_0 (stage 0's bounds), p_0 … p_N, yref_0 … yref_N, W_0 … W_N (column-major),
-#      ubu_0 … ubu_{N-1}, set_lbu, lbu_0 … lbu_{N-1}, lbx_1 … lbx_N, ubx_1 … ubx_N, x_0 … x_N,
-#      u_0 … u_{N-1}]``; the lower input bounds are set only if ``set_lbu`` is not 0;
-#   2  read ``[2, x_0 … x_N, u_0 … u_{N-1}]`` (the solution, into the caller's array).
-# Each stage's sizes come from the solver's own dimensions. If the buffer's length differs from
-# the layout's, nothing is written or read; either way ``data[0]`` returns the layout's length,
-# which the caller checks. The setters are those the wrapper's set/cost_set/constraints_set call.
+# hook): one call writes the whole problem and guess, one reads the solution, where the
+# wrapper's set/get take ≈ 300 calls per solve. The layout is documented in the C template.
 _ITERATE_C = "mufusion_iterate.c"
 _ITERATE_H = "mufusion_iterate.h"
 # The sources are templates for ``str.format`` (``{name}``, ``{upper}``; literal braces doubled),
@@ -100,11 +92,13 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "load_transfer": config.load_transfer,
             "torque_lag": config.torque_lag,
             "stability_envelope": config.stability_envelope, "heading_rows": config.heading_rows,
+            "speed_ceiling": config.speed_ceiling,
             # The parameter vector's layout (planner/ocp.py's Param).
             "n_params": N_PARAMS,
             "utilization": config.utilization_factor,
             # The slack penalties are written into the generated problem (ocp.cost.zl …).
-            "slack_penalties": [config.weights.slack_l1, config.weights.slack_l2],
+            "slack_penalties": [config.weights.slack_l1, config.weights.slack_l2,
+                                config.weights.speed_ceiling_l1, config.weights.speed_ceiling_l2],
             "rk4_steps": stage_steps(config, params),
             "iterate": _ITERATE_HEADER + _ITERATE_SOURCE,
         },
@@ -250,12 +244,14 @@ class AcadosBackend:
         min_speed_mps: float,
         max_drive_force_n: float | None = None,
         max_front_brake_force_n: np.ndarray | None = None,
+        max_speed_mps: np.ndarray | None = None,
     ) -> tuple[int, np.ndarray, np.ndarray]:
         """One RTI step; returns ``(status, states (N+1, 6), inputs (N, 3))``.
 
         ``max_drive_force_n`` lowers the rear drive-force bound for this solve (``None``: the
         actuator's bound); ``max_front_brake_force_n`` ``(N,)`` [N, ≥ 0, ``inf``: none] raises
-        the front braking's bound per stage."""
+        the front braking's bound per stage; ``max_speed_mps`` ``(N,)`` [m/s] is the soft speed
+        ceiling of stages 1 … N (``None``: none)."""
         n = self.config.horizon_steps
         ubu = self._ubu.copy()
         if max_drive_force_n is not None:
@@ -264,7 +260,8 @@ class AcadosBackend:
         if max_front_brake_force_n is not None:
             # F_xf is the second-last bounded input (F_xr last, see _input_bounds).
             lbu[:, -2] = np.maximum(lbu[:, -2], -np.asarray(max_front_brake_force_n, float))
-        lbx, ubx = state_bounds(d_lo, d_hi, min_speed_mps, guess_x, p, self.config)
+        lbx, ubx = state_bounds(d_lo, d_hi, min_speed_mps, guess_x, p, self.config,
+                                max_speed_mps)
         args = (x0, guess_x, guess_u, p, yref, weights, lbx, ubx, ubu, lbu)
         self.last_solve_retried = False
         status, xs, us = self._fast.solve(*args)
@@ -353,7 +350,9 @@ def _describe(
     ocp.constraints.idxbx = np.array([State.d, State.vx, State.psidot, State.vy][: 2 + envelope])
     box = np.array([[-1.0, 0.0, -10.0, -10.0], [1.0, MAX_SPEED_MPS, 10.0, 10.0]])
     ocp.constraints.lbx, ocp.constraints.ubx = box[:, : 2 + envelope]
-    ocp.constraints.idxsbx = np.array([0, 2, 3][: 1 + envelope])
+    # d soft, v_x with the speed ceiling (it can be below the vehicle's own speed), the envelope.
+    soft_speed = [1] if config.speed_ceiling else []
+    ocp.constraints.idxsbx = np.array([0, *soft_speed, 2, 3][: 1 + len(soft_speed) + envelope])
     ocp.constraints.idxbx_e = np.array([State.d])
     ocp.constraints.lbx_e = np.array([-1.0])
     ocp.constraints.ubx_e = np.array([1.0])
@@ -368,13 +367,13 @@ def _describe(
     ocp.constraints.uh = np.r_[np.full(rows.count, rows.upper), np.zeros(heading)]
     # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
     # follows the state, which at stage 0 is fixed, so the rear polygon is soft (and the heading
-    # rows). acados orders a stage's slacks as the soft bounds (d, the envelope's priced as d's)
-    # first, then the soft h rows: SlackPenalties' layout, the envelope's inserted after d's.
+    # rows). acados orders a stage's slacks as the soft bounds first (d, v_x, the envelope's),
+    # then the soft h rows: SlackPenalties' layout; zl prices the lower sides, zu the upper.
     ocp.constraints.idxsh = np.arange(rows.per_axle, rows.count + heading)
-    penalties = slack_penalties(config.weights, rows.per_axle, heading)
-    l1, l2 = penalties.linear_stage, penalties.quadratic_stage
-    ocp.cost.zl = ocp.cost.zu = np.insert(l1, 1, [l1[0]] * envelope)
-    ocp.cost.Zl = ocp.cost.Zu = np.insert(l2, 1, [l2[0]] * envelope)
+    penalties = slack_penalties(config.weights, rows.per_axle, heading, config.speed_ceiling,
+                                envelope)
+    ocp.cost.zl, ocp.cost.zu = penalties.linear_stage, penalties.linear_stage_upper
+    ocp.cost.Zl, ocp.cost.Zu = penalties.quadratic_stage, penalties.quadratic_stage_upper
     ocp.cost.zl_e = ocp.cost.zu_e = penalties.linear_terminal
     ocp.cost.Zl_e = ocp.cost.Zu_e = penalties.quadratic_terminal
 

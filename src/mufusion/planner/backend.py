@@ -13,7 +13,8 @@ class PlannerBackend(Protocol):
     ``solve`` takes the current state, the initial guess ``(N+1, 6)`` / ``(N, 3)``, the stage
     parameters ``(N, N_PARAMS)``, the tracking reference ``(N+1, 9)`` and its weights ``(9,)``,
     the corridor ``(N,)`` × 2, the lowest speed, the drive-force cap and the front braking's
-    bound per stage ``(N,)`` (``inf``: the actuator's); it returns
+    bound per stage ``(N,)`` (``inf``: the actuator's) and the soft speed ceiling of stages
+    1 … N ``(N,)`` (``None``: none); it returns
     ``(status, states, inputs)`` with status 0 or 2 for a usable solution. It may raise.
     ``reset`` forgets every iterate and solver memory (after a failure).
     ``last_solve_retried`` is True when the latest solve needed a second, more robust attempt
@@ -35,6 +36,7 @@ class PlannerBackend(Protocol):
         min_speed_mps: float,
         max_drive_force_n: float | None = None,
         max_front_brake_force_n: np.ndarray | None = None,
+        max_speed_mps: np.ndarray | None = None,
     ) -> tuple[int, np.ndarray, np.ndarray]: ...
 
     def reset(self) -> None: ...

@@ -50,7 +50,8 @@ class CasadiBackend:
         n, ns, dt = config.horizon_steps, config.polygon_sides, config.dt_s
         rows = polygon_rows(ns, load_transfer=config.load_transfer)
         nh = HEADING_ROWS * int(config.heading_rows)
-        pen = slack_penalties(config.weights, rows.per_axle, nh)
+        pen = slack_penalties(config.weights, rows.per_axle, nh, config.speed_ceiling)
+        nv = (n - 1) * int(config.speed_ceiling)  # soft v_x bounds, stages 1..N-1 (as acados)
         layout = ocp_state(config, params)
         nx = layout.nx
         x = ca.SX.sym("x", nx)
@@ -87,6 +88,8 @@ class CasadiBackend:
         U = ca.SX.sym("U", N_INPUTS, n)
         S_lo = ca.SX.sym("S_lo", n)  # d-bound slacks, stages 1..N
         S_hi = ca.SX.sym("S_hi", n)
+        S_vlo = ca.SX.sym("S_vlo", nv)  # v_x-bound slacks, with the speed ceiling
+        S_vhi = ca.SX.sym("S_vhi", nv)
         # Rear-polygon slacks, stages 0..N-1, on each row's lower and upper side (as acados).
         S_rl = ca.SX.sym("S_rl", rows.per_axle, n)
         S_ru = ca.SX.sym("S_ru", rows.per_axle, n)
@@ -98,11 +101,13 @@ class CasadiBackend:
         X0 = ca.SX.sym("X0", nx)
         DLO = ca.SX.sym("DLO", n)
         DHI = ca.SX.sym("DHI", n)
+        VLO = ca.SX.sym("VLO", nv)
+        VHI = ca.SX.sym("VHI", nv)
 
         def slack_cost(s, linear, quadratic):
             return ca.sum1(ca.DM(linear) * s + 0.5 * ca.DM(quadratic) * s**2)
 
-        corridor, rear, heading = pen.corridor, pen.rear_polygon, pen.heading
+        corridor, speed, rear, heading = pen.corridor, pen.speed, pen.rear_polygon, pen.heading
         cost: Any = 0
         g, lbg, ubg = [X[:, 0] - X0], [0.0] * nx, [0.0] * nx
         for k in range(n):
@@ -143,15 +148,24 @@ class CasadiBackend:
             g.append(X[State.d, k + 1] - S_hi[k] - DHI[k])
             lbg.append(-np.inf)
             ubg.append(0.0)
+            if k < nv:  # v_x bounds at stage k+1, soft as in the acados description
+                cost += dt * (
+                    slack_cost(S_vlo[k], pen.linear_stage[speed], pen.quadratic_stage[speed])
+                    + slack_cost(S_vhi[k], pen.linear_stage_upper[speed],
+                                 pen.quadratic_stage_upper[speed]))
+                g += [X[State.vx, k + 1] + S_vlo[k] - VLO[k],
+                      X[State.vx, k + 1] - S_vhi[k] - VHI[k]]
+                lbg += [0.0, -np.inf]
+                ubg += [np.inf, 0.0]
         r_e = X[:N_STATES, n] - YREF[:N_STATES, n]
         cost += 0.5 * ca.sum1(WD[:N_STATES] * r_e**2)
 
         self._nx, self._layout = nx, layout
         self._n_x = nx * (n + 1)
         self._n_u = N_INPUTS * n
-        z = ca.vertcat(ca.vec(X), ca.vec(U), S_lo, S_hi, ca.vec(S_rl), ca.vec(S_ru),
-                       ca.vec(S_hl), ca.vec(S_hu))
-        par = ca.vertcat(ca.vec(P), ca.vec(YREF), WD, X0, DLO, DHI)
+        z = ca.vertcat(ca.vec(X), ca.vec(U), S_lo, S_hi, S_vlo, S_vhi, ca.vec(S_rl),
+                       ca.vec(S_ru), ca.vec(S_hl), ca.vec(S_hu))
+        par = ca.vertcat(ca.vec(P), ca.vec(YREF), WD, X0, DLO, DHI, VLO, VHI)
         self._lbg, self._ubg = np.array(lbg), np.array(ubg)
         self._n_z = z.shape[0]
         self._solver = ca.nlpsol(
@@ -165,10 +179,11 @@ class CasadiBackend:
         lbu = np.tile([-rate, lower[0], lower[1]], (n, 1))
         ubu = np.tile([rate, upper[0], upper[1]], (n, 1))
         self._lbu, self._ubu = lbu, ubu
-        self._n_slack = 2 * n + 2 * (rows.per_axle + nh) * n
+        self._n_slack = 2 * n + 2 * nv + 2 * (rows.per_axle + nh) * n
+        self._soft_speed = bool(nv)
 
     def solve(self, x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi, min_speed_mps,
-              max_drive_force_n=None, max_front_brake_force_n=None):
+              max_drive_force_n=None, max_front_brake_force_n=None, max_speed_mps=None):
         """Solve to convergence; returns ``(status, states (N+1, 6), inputs (N, 3))``."""
         n = self.config.horizon_steps
         ubu = self._ubu.copy()
@@ -183,13 +198,18 @@ class CasadiBackend:
                 x0, guess_x, guess_u, p, self.params, self.config, self._layout)
         lbx_x = np.full((n + 1, self._nx), -np.inf)
         ubx_x = np.full((n + 1, self._nx), np.inf)
-        # vx bounds at stages 1..N-1 are hard, as in the acados description.
-        lbx_x[1:n, State.vx] = min_speed_mps
-        ubx_x[1:n, State.vx] = MAX_SPEED_MPS
+        v_hi = np.full(n - 1, MAX_SPEED_MPS)
+        if max_speed_mps is not None:
+            v_hi = np.minimum(v_hi, np.asarray(max_speed_mps, dtype=float)[: n - 1])
+        if not self._soft_speed:
+            # vx bounds at stages 1..N-1 are hard, as in the acados description.
+            lbx_x[1:n, State.vx] = min_speed_mps
+            ubx_x[1:n, State.vx] = v_hi
         lbz = np.concatenate([lbx_x.ravel(), lbu.ravel(), np.zeros(self._n_slack)])
         ubz = np.concatenate([ubx_x.ravel(), ubu.ravel(), np.full(self._n_slack, np.inf)])
         z0 = np.concatenate([guess_x.ravel(), guess_u.ravel(), np.zeros(self._n_slack)])
-        par = np.concatenate([p.ravel(), yref.ravel(), weights, x0, d_lo, d_hi])
+        soft = (np.full(n - 1, min_speed_mps), v_hi) if self._soft_speed else ()
+        par = np.concatenate([p.ravel(), yref.ravel(), weights, x0, d_lo, d_hi, *soft])
         sol = self._solver(x0=z0, p=par, lbx=lbz, ubx=ubz, lbg=self._lbg, ubg=self._ubg)
         ok = bool(self._solver.stats()["success"])
         z = np.asarray(sol["x"]).ravel()

@@ -32,6 +32,12 @@ class CostWeights:
     evade_speed: float = 0.05
     slack_l1: float = 1e4
     slack_l2: float = 1e4
+    # Exact penalty of a plan's speed above the speed ceiling (``PlannerConfig.speed_ceiling``),
+    # per m/s and stage: far above the speed tracking's, far below the lane's and the rear
+    # polygon's (``slack_l1``), so a plan brakes to the ceiling unless the lane or the friction
+    # forbids it.
+    speed_ceiling_l1: float = 1e2
+    speed_ceiling_l2: float = 1e2
 
 
 @dataclass(frozen=True)
@@ -157,6 +163,12 @@ class PlannerConfig:
     # The reference regains speed from the vehicle's own no faster than the cruise traction cap
     # on the g-g ellipse allows (planner/speed_profile.py, ``regain_limited_profile_mps``).
     reference_regain_limit: bool = True
+    # In cruise, the speed reference (``curve_speed_reference``) also a soft upper bound on each
+    # stage's planned speed (planner/speed_ceiling.py): tracked only in a least-squares sense,
+    # plans rise above its braking ramps for their first stages and catch up at the friction
+    # limit further on. Off: measured, not adopted (from nearby starts GT's exits did not
+    # change; docs/decisions/0088).
+    speed_ceiling: bool = False
     # Plan the front lateral force as a state whose rate the steering's rate limit bounds
     # (planner/front_force.py; beyond the paper, whose forces are free inputs).
     steering_rate_limit: bool = True

@@ -33,6 +33,7 @@ from mufusion.planner.safeguards import (
     SanitizedFriction,
     judge_solution,
 )
+from mufusion.planner.speed_ceiling import speed_ceiling_mps
 from mufusion.planner.speed_profile import (
     curve_speed_reference_mps,
     lowest_under_axles,
@@ -109,6 +110,7 @@ def iterate(
     for _ in range(iterations):
         guess_x, guess_u = xs, us
         speed_ref: float | np.ndarray = reference_speed_mps
+        ceiling: np.ndarray | None = None
         if cfg.curve_speed_reference and mode in ("cruise", "evade"):
             # Before the stage parameters: those count the sanitised μ̂ of the stages.
             # The reference brakes with the friction the axles meet when the torque lands
@@ -128,15 +130,23 @@ def iterate(
                 lowest_under_axles(problem.unseen_road.cap(mu_of_s), par.cog_to_rear_axle_m,
                                    ahead_m), max(float(x0[State.vx]), 0.0))
             kappa_ref = sharpest_under_axles(curvature_of_s, par.cog_to_rear_axle_m, ahead_m)
+            accel_fraction = (cfg.reference_curve_fraction * cfg.utilization_factor
+                              * np.cos(np.pi / cfg.polygon_sides))
             speed_ref = curve_speed_reference_mps(
-                guess_x[:, State.s], kappa_ref, mu_ref, reference_speed_mps,
-                cfg.reference_curve_fraction * cfg.utilization_factor
-                * np.cos(np.pi / cfg.polygon_sides),
+                guess_x[:, State.s], kappa_ref, mu_ref, reference_speed_mps, accel_fraction,
                 cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
                 (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2)
                 if cfg.reference_regain_limit and mode == "cruise" else None,
                 unseen,
             )
+            if cfg.speed_ceiling and mode == "cruise":
+                # The reference's speeds are the point mass's highest: a ceiling, not only a
+                # target (a least-squares target let plans put off its braking ramps step after
+                # step; docs/decisions/0088). Not while evading: the lane recovery's plans keep
+                # the speed they have.
+                ceiling = speed_ceiling_mps(
+                    speed_ref[1:], float(x0[State.vx]), mu_ref(guess_x[:-1, State.s]),
+                    cfg.reference_braking_fraction * accel_fraction, cfg.dt_s)
         stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
                                  cfg.utilization_factor, cfg.stiffness_table,
                                  par.torque_time_constant_s if cfg.axle_friction else None,
@@ -176,6 +186,7 @@ def iterate(
                 # limit after an evasion leaves the driven axle no lateral reserve.
                 par.mass_kg * cfg.max_cruise_accel_mps2 if mode == "cruise" else 0.0,
                 stage.front_brake_limit_n,
+                ceiling,
             )
             retried = retried or backend.last_solve_retried
             if status not in (0, 2):

@@ -63,15 +63,19 @@ def state_bounds(
     guess_x: np.ndarray,
     p: np.ndarray,
     config: PlannerConfig,
+    max_speed_mps: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The state boxes of stages 1 … N, ``(lower, upper)`` each ``(N, m)``: ``d`` within the
-    corridor ``[d_lo, d_hi]``, ``v_x`` within ``[min_speed_mps, MAX_SPEED_MPS]``, and with
+    corridor ``[d_lo, d_hi]``, ``v_x`` within ``[min_speed_mps, MAX_SPEED_MPS]`` (the upper
+    bound lowered to ``max_speed_mps`` ``(N,)``, the speed ceiling, where given), and with
     ``config.stability_envelope`` (``m = 4``) ``|ψ̇|`` and ``|v_y|`` within the bounds above at
     each stage's μ̂ (``p``'s λ μ̂ over λ; the terminal stage takes the last stage's parameters)
     and the guess's speed ``guess_x[1:]``."""
     n = config.horizon_steps
     lower, upper = np.empty((n, 4)), np.empty((n, 4))
     lower[:, 0], lower[:, 1], upper[:, 0], upper[:, 1] = d_lo, min_speed_mps, d_hi, MAX_SPEED_MPS
+    if max_speed_mps is not None:
+        upper[:, 1] = np.minimum(MAX_SPEED_MPS, max_speed_mps)
     if not config.stability_envelope:
         return lower[:, :2], upper[:, :2]
     mu_hat = p[np.minimum(np.arange(1, n + 1), n - 1), Param.utilized_friction]

@@ -87,6 +87,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         curve_speed_reference=cfg.planner.curve_speed_reference,
         reference_braking_fraction=cfg.planner.reference_braking_fraction,
         reference_curve_fraction=cfg.planner.reference_curve_fraction,
+        speed_ceiling=cfg.planner.speed_ceiling,
         stability_envelope=cfg.planner.stability_envelope,
         heading_rows=cfg.planner.heading_rows,
         reference_regain_limit=cfg.planner.reference_regain_limit,

@@ -170,6 +170,11 @@ class PlannerSettings(_Strict):
         PlannerConfig.reference_curve_fraction)
     """Share of the friction polygon's lateral reach the speed reference's curve speeds assume:
     1 reaches a curve at the polygon's limit speed, less slower (docs/decisions/0065)."""
+    speed_ceiling: bool = PlannerConfig.speed_ceiling
+    """In cruise, the speed reference is also a soft upper bound on each stage's planned speed,
+    so plans follow its braking ramps instead of putting them off (:mod:`mufusion.planner.
+    speed_ceiling`); off (the default: measured, not adopted, docs/decisions/0088), a
+    least-squares target only."""
     stability_envelope: bool = PlannerConfig.stability_envelope
     """Soft yaw-rate and body-slip bounds from μ̂ in the OCP (acados;
     :mod:`mufusion.planner.stability`, docs/decisions/0065)."""
