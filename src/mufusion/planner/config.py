@@ -166,8 +166,8 @@ class PlannerConfig:
     # In cruise, the speed reference (``curve_speed_reference``) also a soft upper bound on each
     # stage's planned speed (planner/speed_ceiling.py): tracked only in a least-squares sense,
     # plans rise above its braking ramps for their first stages and catch up at the friction
-    # limit further on. Off: measured, not adopted (from nearby starts GT's exits did not
-    # change; docs/decisions/0088).
+    # limit further on. Off: measured, not adopted (from nearby starts GT's exits barely moved
+    # and F-safe's where GT kept its lane doubled; docs/decisions/0088).
     speed_ceiling: bool = False
     # Plan the front lateral force as a state whose rate the steering's rate limit bounds
     # (planner/front_force.py; beyond the paper, whose forces are free inputs).
