@@ -35,7 +35,7 @@ def test_the_ceiling_lowers_only_the_speeds_upper_bound() -> None:
 
 def test_the_ceiling_is_priced_below_the_lane_and_the_minimum_speed_as_the_lane() -> None:
     weights = CostWeights()
-    pen = slack_penalties(weights, 6, 2)
+    pen = slack_penalties(weights, 6, 2, speed_ceiling=True)
     assert pen.linear_stage_upper[pen.speed][0] == weights.speed_ceiling_l1
     assert pen.linear_stage[pen.speed][0] == weights.slack_l1
     assert weights.speed_ceiling_l1 < weights.slack_l1

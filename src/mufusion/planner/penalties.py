@@ -19,8 +19,8 @@ class SlackPenalties:
     the minimum speed, priced as the corridor; the upper side the ceiling, priced lower,
     ``CostWeights.speed_ceiling_l1/l2``; without the ceiling the speed's bounds are hard and
     have no slack), the stability envelope's ψ̇ and v_y if the OCP has it (priced as the
-    corridor; acados only), then the rear polygon's
-    rows (:func:`polygon_rows`), then the heading rows if the OCP has them
+    corridor; acados only), then the rear polygon's rows (:func:`polygon_rows`), then the
+    heading rows if the OCP has them
     (``PlannerConfig.heading_rows``); at the terminal stage N: the corridor bound only. The
     penalty of a slack ``σ ≥ 0`` is ``linear σ + quadratic σ² / 2``; acados multiplies stage
     penalties by ``dt`` (the terminal one not), and the reference backend does the same.
@@ -34,7 +34,7 @@ class SlackPenalties:
     linear_terminal: np.ndarray
     quadratic_terminal: np.ndarray
     rear_rows: int
-    speed_rows: int = 1
+    speed_rows: int = 0
     envelope_rows: int = 0
 
     @property
@@ -64,27 +64,27 @@ class SlackPenalties:
 
 
 def slack_penalties(
-    weights: CostWeights, rear_rows: int, heading_rows: int = 0, speed_ceiling: bool = True,
+    weights: CostWeights, rear_rows: int, heading_rows: int = 0, speed_ceiling: bool = False,
     envelope_rows: int = 0,
 ) -> SlackPenalties:
     """The one place the soft constraints and their penalties are laid out (both backends).
 
     Examples
     --------
-    >>> pen = slack_penalties(CostWeights(), 6)
+    >>> pen = slack_penalties(CostWeights(), 6, speed_ceiling=True)
     >>> pen.linear_stage.shape, pen.linear_terminal.shape, float(pen.linear_stage[pen.corridor][0])
     ((8,), (1,), 10000.0)
     >>> float(pen.linear_stage_upper[pen.speed][0])
     100.0
-    >>> slack_penalties(CostWeights(), 6, speed_ceiling=False).rear_polygon
+    >>> slack_penalties(CostWeights(), 6).rear_polygon  # without the ceiling: no speed slack
     slice(1, 7, None)
     """
     speed_rows = int(speed_ceiling)
     n_stage = 1 + speed_rows + envelope_rows + rear_rows + heading_rows
     linear, quadratic = np.full(n_stage, weights.slack_l1), np.full(n_stage, weights.slack_l2)
     linear_upper, quadratic_upper = linear.copy(), quadratic.copy()
-    linear_upper[1:1 + speed_rows] = weights.speed_ceiling_l1
-    quadratic_upper[1:1 + speed_rows] = weights.speed_ceiling_l2
+    speed = slice(1, 1 + speed_rows)  # SlackPenalties.speed
+    linear_upper[speed], quadratic_upper[speed] = weights.speed_ceiling_l1, weights.speed_ceiling_l2
     return SlackPenalties(
         linear_stage=linear,
         quadratic_stage=quadratic,
