@@ -133,3 +133,23 @@ def test_a_planner_without_unseen_road_still_plans_and_the_log_says_what_it_igno
     assert OlderPlanner.steps >= len(log.planning_steps) > 0
     assert "planner_error" not in kinds and "minimal_risk" not in kinds
     assert kinds.count("unseen_road_ignored") == (1 if told else 0)
+
+
+def test_the_log_names_the_solver_the_planner_ran(scenario, monkeypatch) -> None:
+    """A planner configured for acados that cannot load it runs the CasADi reference: the run's
+    metadata and its metrics say which one ran, not which one was configured."""
+    from mufusion.metrics import compute_metrics
+    from mufusion.planner import acados_backend
+
+    loop = build_loop(scenario, friction="GT")
+    assert loop.meta.planner_backend == "AcadosBackend"
+
+    def unavailable(*args, **kwargs):
+        raise OSError("libacados.so: cannot open shared object file")
+
+    monkeypatch.setattr(acados_backend.AcadosBackend, "__init__", unavailable)
+    loop = build_loop(scenario, friction="GT")
+    assert scenario.planner.backend == "acados"
+    assert loop.meta.planner_backend == "CasadiBackend"
+    log = loop.run(0.2, warmup_steps=1)
+    assert compute_metrics(log).planner_backend == "CasadiBackend"

@@ -77,6 +77,9 @@ class RunMetrics:
     feasibility, feasibility_margin_mps
         The physics oracle's class of the variant (feasible / marginal / infeasible) and its
         margin [m/s] (:mod:`mufusion.scenarios.feasibility`), from the run's metadata.
+    planner_backend
+        The OCP solver the package's planner ran (``AcadosBackend``; ``CasadiBackend`` where
+        acados could not be loaded), from the run's metadata (None: a plug-in planner).
     faults_injected
         Faults the scenario injected (``[[faults]]``).
     estimate_fallbacks
@@ -143,6 +146,7 @@ class RunMetrics:
     duration_s: float
     feasibility: str = "unknown"
     feasibility_margin_mps: float | None = None
+    planner_backend: str | None = None
     faults_injected: int = 0
     # Defaults to 0: records written before the robust retry existed had none.
     robust_qp_retries: int = 0
@@ -247,6 +251,7 @@ def compute_metrics(log: RunLog) -> RunMetrics:
         duration_s=float(ts["t_s"].iloc[-1]),
         feasibility=log.meta.feasibility,
         feasibility_margin_mps=log.meta.feasibility_margin_mps,
+        planner_backend=log.meta.planner_backend,
         **_reliability(log),
         start_speed_mps=float(ts["speed_mps"].iloc[0]),
         start_lateral_offset_m=float(ts["d_m"].iloc[0]),

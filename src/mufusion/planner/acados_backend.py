@@ -8,9 +8,7 @@ import io
 import json
 import logging
 from importlib import resources
-from pathlib import Path
 from types import ModuleType
-from typing import Any
 
 import numpy as np
 
@@ -19,37 +17,20 @@ from mufusion.planner.acados_loader import (
     cache_dir,
     load_acados_template,
 )
-from mufusion.planner.front_force import front_force_rate_bound_n_per_s
+from mufusion.planner.acados_ocp import (
+    ITERATE_C,
+    ITERATE_H,
+    describe,
+    input_bounds,
+    stage_slack_penalties,
+)
 from mufusion.planner.integration import stage_steps
-from mufusion.planner.ocp import (
-    HEADING_ROWS,
-    MAX_SPEED_MPS,
-    N_PARAMS,
-    POLYGON_ROW_LOWER_BOUND,
-    Param,
-    PlannerConfig,
-    constraint_expressions,
-    longitudinal_force_bounds_n,
-    ocp_rear_stiffness,
-    polygon_rows,
-    slack_penalties,
-)
-from mufusion.planner.ocp_state import (
-    augmented_problem,
-    force_rates,
-    ocp_state,
-    plan_from_augmented,
-    tire_forces,
-)
+from mufusion.planner.ocp import N_PARAMS, PlannerConfig
+from mufusion.planner.ocp_state import augmented_problem, ocp_state, plan_from_augmented
+from mufusion.planner.penalties import corridor_slack_scale
 from mufusion.planner.stability import state_bounds
 from mufusion.vehicle.params import VehicleParams
-from mufusion.vehicle.planner_model import (
-    N_INPUTS,
-    N_STATES,
-    Input,
-    State,
-    frenet_bicycle_dynamics,
-)
+from mufusion.vehicle.planner_model import N_INPUTS, N_STATES
 
 _log = logging.getLogger(__name__)
 _FORMAT_VERSION = "13"
@@ -57,8 +38,6 @@ _FORMAT_VERSION = "13"
 # The problem's and the iterate's batch access compiled into the solver (acados' custom-update
 # hook): one call writes the whole problem and guess, one reads the solution, where the
 # wrapper's set/get take ≈ 300 calls per solve. The layout is documented in the C template.
-_ITERATE_C = "mufusion_iterate.c"
-_ITERATE_H = "mufusion_iterate.h"
 # The sources are templates for ``str.format`` (``{name}``, ``{upper}``; literal braces doubled),
 # package resources: their text is part of the problem hash, so an edit regenerates the solvers.
 _TEMPLATES = resources.files("mufusion.planner") / "acados_c"
@@ -122,10 +101,10 @@ class _GeneratedSolver:
             if not lib.exists():
                 # The problem description is needed only to generate the code (the hash names it).
                 _log.info("generating and compiling the acados solver in %s", export)
-                ocp = _describe(at, params, config, name, export, hpipm_mode)
+                ocp = describe(at, params, config, name, export, hpipm_mode)
                 at.AcadosOcpSolver.generate(ocp, json_file=str(export / "ocp.json"))
-                (export / _ITERATE_H).write_text(_ITERATE_HEADER.format(name=name))
-                (export / _ITERATE_C).write_text(
+                (export / ITERATE_H).write_text(_ITERATE_HEADER.format(name=name))
+                (export / ITERATE_C).write_text(
                     _ITERATE_SOURCE.format(name=name, upper=name.upper()))
                 # acados' ctypes wrapper, not its Cython one: each call below is one C call
                 # either way, and the Cython module's 1.9 MB of C took 6 of a build's 8.5 s.
@@ -133,11 +112,26 @@ class _GeneratedSolver:
         with contextlib.redirect_stdout(io.StringIO()):  # it prints whether OpenMP is in
             self.solver = at.AcadosOcpSolver(None, json_file=str(export / "ocp.json"),
                                              build=False, generate=False, verbose=False)
+        self._price_corridor_by_stage(config)
         self.n = n
         self.layout = ocp_state(config, params)
         self.params, self.config = params, config
-        self._generated_lbu = np.tile(_input_bounds(params, config)[0], (n, 1))
+        self._generated_lbu = np.tile(input_bounds(params, config)[0], (n, 1))
         self._lbu_changed = False
+
+    def _price_corridor_by_stage(self, config: PlannerConfig) -> None:
+        """Write each stage's corridor slack penalties at its scale (the generated problem
+        prices every stage alike; the scale is data, not code, so it needs no other solver)."""
+        scale = corridor_slack_scale(config.horizon_steps, config.lane_slack_lead)
+        if np.all(scale == 1.0):
+            return
+        pen = stage_slack_penalties(config)
+        for k in range(1, config.horizon_steps):  # stage 0 has no corridor (x_0 is fixed)
+            for field, values in (("zl", pen.linear_stage), ("zu", pen.linear_stage_upper),
+                                  ("Zl", pen.quadratic_stage), ("Zu", pen.quadratic_stage_upper)):
+                scaled = values.copy()
+                scaled[pen.corridor] *= scale[k - 1]
+                self.solver.cost_set(k, field, scaled)
 
     def solve(
         self,
@@ -219,7 +213,7 @@ class AcadosBackend:
         at = load_acados_template()
         self.params, self.config = params, config
         # The drive bound varies with the mode, the front braking's with the stages' friction.
-        self._lbu, self._ubu = _input_bounds(params, config)
+        self._lbu, self._ubu = input_bounds(params, config)
         self._fast = _GeneratedSolver(at, params, config, FAST_HPIPM_MODE)
         self._robust = (
             _GeneratedSolver(at, params, config, ROBUST_HPIPM_MODE) if robust_retry else None
@@ -258,7 +252,7 @@ class AcadosBackend:
             ubu[-1] = min(ubu[-1], max_drive_force_n)
         lbu = np.tile(self._lbu, (n, 1))
         if max_front_brake_force_n is not None:
-            # F_xf is the second-last bounded input (F_xr last, see _input_bounds).
+            # F_xf is the second-last bounded input (F_xr last, see input_bounds).
             lbu[:, -2] = np.maximum(lbu[:, -2], -np.asarray(max_front_brake_force_n, float))
         lbx, ubx = state_bounds(d_lo, d_hi, min_speed_mps, guess_x, p, self.config,
                                 max_speed_mps)
@@ -283,115 +277,3 @@ class AcadosBackend:
         self._fast.reset()
         if self._robust is not None:
             self._robust.reset()
-
-
-def _input_bounds(params: VehicleParams, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds of the bounded inputs: ``(F_xf, F_xr)``, led by the front force's rate with the
-    steering's rate limit (``F_xr`` last either way)."""
-    lower, upper = longitudinal_force_bounds_n(params)
-    if config.steering_rate_limit:
-        rate = front_force_rate_bound_n_per_s(params, config)
-        lower, upper = np.concatenate([[-rate], lower]), np.concatenate([[rate], upper])
-    return np.array(lower, dtype=float), np.array(upper, dtype=float)
-
-
-def _describe(
-    at: ModuleType, params: VehicleParams, config: PlannerConfig, name: str, export: Path,
-    hpipm_mode: str,
-) -> Any:
-    """The ``AcadosOcp`` description of the shared problem (for code generation)."""
-    import casadi as ca
-
-    n, ns = config.horizon_steps, config.polygon_sides
-    ocp = at.AcadosOcp()
-    model = at.AcadosModel()
-    model.name = name
-    layout = ocp_state(config, params)
-    nx = layout.nx
-    x = ca.SX.sym("x", nx)
-    u = ca.SX.sym("u", N_INPUTS)
-    p = ca.SX.sym("p", N_PARAMS)
-    model.x, model.u, model.p = x, u, p
-    model.xdot = ca.SX.sym("xdot", nx)
-    # The tire forces: those that are states (planner/ocp_state.py), the inputs' otherwise.
-    forces = tire_forces(x, u, layout)
-    f = frenet_bicycle_dynamics(x[:N_STATES], forces, p[Param.curvature],
-                                ocp_rear_stiffness(p, forces, params, config.load_transfer), params)
-    f = ca.vertcat(f, *force_rates(x, u, layout))
-    model.f_expl_expr = f
-    model.f_impl_expr = model.xdot - f
-    model.con_h_expr = constraint_expressions(x[:N_STATES], forces, p, params, ns,
-                                             load_transfer=config.load_transfer,
-                                             heading=config.heading_rows)
-    ocp.model = model
-    ocp.dims.N = n
-    ocp.parameter_values = np.ones(N_PARAMS)
-
-    ny = N_STATES + N_INPUTS
-    ocp.cost.cost_type = "LINEAR_LS"
-    ocp.cost.cost_type_e = "LINEAR_LS"
-    # y = [planner state (6), F_yf, F_xf, F_xr]: the tracking reference's layout. With the
-    # steering's rate limit the F_yf weight acts on the force state; the rate is bounded only.
-    # The longitudinal weights act on the inputs, the commands where the forces lag.
-    vx = np.zeros((ny, nx))
-    vx[:N_STATES, :N_STATES] = np.eye(N_STATES)
-    vu = np.zeros((ny, N_INPUTS))
-    vu[N_STATES:, :] = np.eye(N_INPUTS)
-    if layout.front_force is not None:
-        vu[N_STATES + Input.fyf, Input.fyf] = 0.0
-        vx[N_STATES + Input.fyf, layout.front_force] = 1.0
-    ocp.cost.Vx, ocp.cost.Vu = vx, vu
-    ocp.cost.Vx_e = np.eye(N_STATES, nx)
-    ocp.cost.W, ocp.cost.W_e = np.eye(ny), np.eye(N_STATES)
-    ocp.cost.yref, ocp.cost.yref_e = np.zeros(ny), np.zeros(N_STATES)
-
-    ocp.constraints.x0 = np.eye(nx)[State.vx] * 10.0  # an example: the solve writes x_0
-    envelope = 2 * int(config.stability_envelope)  # ψ̇ and v_y, soft, written per solve
-    ocp.constraints.idxbx = np.array([State.d, State.vx, State.psidot, State.vy][: 2 + envelope])
-    box = np.array([[-1.0, 0.0, -10.0, -10.0], [1.0, MAX_SPEED_MPS, 10.0, 10.0]])
-    ocp.constraints.lbx, ocp.constraints.ubx = box[:, : 2 + envelope]
-    # d soft, v_x with the speed ceiling (it can be below the vehicle's own speed), the envelope.
-    soft_speed = [1] if config.speed_ceiling else []
-    ocp.constraints.idxsbx = np.array([0, *soft_speed, 2, 3][: 1 + len(soft_speed) + envelope])
-    ocp.constraints.idxbx_e = np.array([State.d])
-    ocp.constraints.lbx_e = np.array([-1.0])
-    ocp.constraints.ubx_e = np.array([1.0])
-    ocp.constraints.idxsbx_e = np.array([0])
-    ocp.constraints.idxbu = np.array(
-        [Input.fyf, Input.fxf, Input.fxr] if config.steering_rate_limit else [Input.fxf, Input.fxr]
-    )
-    ocp.constraints.lbu, ocp.constraints.ubu = _input_bounds(params, config)
-    rows = polygon_rows(ns, load_transfer=config.load_transfer)
-    heading = HEADING_ROWS * int(config.heading_rows)
-    ocp.constraints.lh = np.r_[np.full(rows.count, rows.lower), [POLYGON_ROW_LOWER_BOUND] * heading]
-    ocp.constraints.uh = np.r_[np.full(rows.count, rows.upper), np.zeros(heading)]
-    # Front forces are inputs and always have a feasible choice (hard); the rear lateral force
-    # follows the state, which at stage 0 is fixed, so the rear polygon is soft (and the heading
-    # rows). acados orders a stage's slacks as the soft bounds first (d, v_x, the envelope's),
-    # then the soft h rows: SlackPenalties' layout; zl prices the lower sides, zu the upper.
-    ocp.constraints.idxsh = np.arange(rows.per_axle, rows.count + heading)
-    penalties = slack_penalties(config.weights, rows.per_axle, heading, config.speed_ceiling,
-                                envelope)
-    ocp.cost.zl, ocp.cost.zu = penalties.linear_stage, penalties.linear_stage_upper
-    ocp.cost.Zl, ocp.cost.Zu = penalties.quadratic_stage, penalties.quadratic_stage_upper
-    ocp.cost.zl_e = ocp.cost.zu_e = penalties.linear_terminal
-    ocp.cost.Zl_e = ocp.cost.Zu_e = penalties.quadratic_terminal
-
-    so = ocp.solver_options
-    so.tf = n * config.dt_s
-    so.nlp_solver_type = "SQP_RTI"
-    so.qp_solver = "PARTIAL_CONDENSING_HPIPM"
-    so.qp_solver_cond_N = max(1, n // 4)
-    so.hpipm_mode = hpipm_mode
-    so.hessian_approx = "GAUSS_NEWTON"
-    so.integrator_type = "ERK"
-    so.sim_method_num_stages = 4
-    # Enough RK4 steps per stage that the model stays stable down to rest (planner/integration.py).
-    so.sim_method_num_steps = stage_steps(config, params)
-    so.qp_solver_iter_max = 50
-    # Written into the export directory by the caller, compiled there (no copy from the cwd).
-    so.custom_update_filename = _ITERATE_C
-    so.custom_update_header_filename = _ITERATE_H
-    so.custom_update_copy = False
-    ocp.code_export_directory = str(export)
-    return ocp

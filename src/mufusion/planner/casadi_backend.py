@@ -34,6 +34,7 @@ from mufusion.planner.ocp_state import (
     plan_from_augmented,
     tire_forces,
 )
+from mufusion.planner.penalties import corridor_slack_scale
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import N_INPUTS, N_STATES, Input, State, frenet_bicycle_dynamics
 
@@ -51,6 +52,7 @@ class CasadiBackend:
         rows = polygon_rows(ns, load_transfer=config.load_transfer)
         nh = HEADING_ROWS * int(config.heading_rows)
         pen = slack_penalties(config.weights, rows.per_axle, nh, config.speed_ceiling)
+        lead = corridor_slack_scale(n, config.lane_slack_lead)
         nv = (n - 1) * int(config.speed_ceiling)  # soft v_x bounds, stages 1..N-1 (as acados)
         layout = ocp_state(config, params)
         nx = layout.nx
@@ -137,8 +139,9 @@ class CasadiBackend:
                 lbg += [POLYGON_ROW_LOWER_BOUND] * nh + [-np.inf] * nh
                 ubg += [np.inf] * nh + [0.0] * nh
             # d bounds at stage k+1 (softened); terminal slacks carry no dt factor.
-            if k < n - 1:
-                scale, z1, z2 = dt, pen.linear_stage[corridor], pen.quadratic_stage[corridor]
+            if k < n - 1:  # each stage's price at its scale (penalties.corridor_slack_scale)
+                scale = dt * lead[k]
+                z1, z2 = pen.linear_stage[corridor], pen.quadratic_stage[corridor]
             else:
                 scale, z1, z2 = 1.0, pen.linear_terminal, pen.quadratic_terminal
             cost += scale * (slack_cost(S_lo[k], z1, z2) + slack_cost(S_hi[k], z1, z2))

@@ -192,6 +192,13 @@ class PlannerConfig:
     # 0.1 rad, off the reference point's bounds; not while evading (planner/corridor.py). Off:
     # measured, not adopted (docs/decisions/0081).
     heading_rows: bool = False
+    # The corridor's slack costs ``lane_slack_lead`` times more at the first stage than at the
+    # horizon's end, geometrically in between (planner/penalties.py, ``corridor_slack_scale``),
+    # so a plan that cannot keep the corridor leaves it as late as it can. 1 (the default): the
+    # same price at every stage; 10 kept F-safe in lane where its friction bound made the curve
+    # look impossible, but GT, deferring excursions that were real, left its lane more and in
+    # more variants: measured, not adopted (docs/decisions/0089).
+    lane_slack_lead: float = 1.0
 
     def __post_init__(self) -> None:
         if self.stiffness not in STIFFNESS_MODELS:
@@ -233,5 +240,7 @@ class PlannerConfig:
             raise ValueError(
                 f"cold_start_iterations must be in [1, 20], got {self.cold_start_iterations}"
             )
+        if not 1.0 <= self.lane_slack_lead <= 1e3:
+            raise ValueError(f"lane_slack_lead must be in [1, 1000], got {self.lane_slack_lead!r}")
         if self.lane_d_min_m >= self.lane_d_max_m:
             raise ValueError("lane_d_min_m must be below lane_d_max_m")

@@ -96,3 +96,27 @@ def slack_penalties(
         speed_rows=speed_rows,
         envelope_rows=envelope_rows,
     )
+
+
+def corridor_slack_scale(horizon_steps: int, lead: float) -> np.ndarray:
+    """Factors on the corridor slack's penalties at stages 1 … N, shape ``(N,)`` (both backends).
+
+    Stage k's factor is ``lead ** (1 − k/N)``: ``lead`` (almost) at the first stage, 1 at the
+    terminal one. A plan's first stages are driven and its later ones planned again, with the
+    estimates and the iterate of the steps to come; an equal price at every stage let a plan that
+    cannot keep the whole corridor leave it at once rather than where it must
+    (docs/decisions/0089).
+
+    Examples
+    --------
+    >>> corridor_slack_scale(4, 16.0).round(3).tolist()
+    [8.0, 4.0, 2.0, 1.0]
+    >>> corridor_slack_scale(4, 1.0).tolist()
+    [1.0, 1.0, 1.0, 1.0]
+    """
+    if not (isinstance(horizon_steps, int) and horizon_steps >= 1):
+        raise ValueError(f"horizon_steps must be an integer >= 1, got {horizon_steps!r}")
+    if not (np.isfinite(lead) and lead >= 1.0):
+        raise ValueError(f"lead must be a finite number >= 1, got {lead!r}")
+    k = np.arange(1, horizon_steps + 1, dtype=float)
+    return np.asarray(float(lead) ** (1.0 - k / horizon_steps))

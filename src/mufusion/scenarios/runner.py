@@ -90,6 +90,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         speed_ceiling=cfg.planner.speed_ceiling,
         stability_envelope=cfg.planner.stability_envelope,
         heading_rows=cfg.planner.heading_rows,
+        lane_slack_lead=cfg.planner.lane_slack_lead,
         reference_regain_limit=cfg.planner.reference_regain_limit,
         steering_rate_limit=cfg.planner.steering_rate_limit,
         load_transfer=cfg.planner.load_transfer,
@@ -222,6 +223,8 @@ def build_loop(
         meta=run_meta(cfg, label, params, road, config).model_copy(update={
             "planner_plugin": _component_name(planner),
             "controller_plugin": _component_name(controller),
+            "planner_backend": type(the_planner.backend).__name__
+            if isinstance(the_planner, TractionAdaptivePlanner) else None,
         }),
     )
 

@@ -183,6 +183,11 @@ class PlannerSettings(_Strict):
     per stage in the OCP; :func:`mufusion.planner.corridor.heading_rows`); off (the default:
     measured, not adopted, docs/decisions/0081), the lane bounds the reference point less the
     guess's heading swing."""
+    lane_slack_lead: Annotated[float, Field(ge=1.0, le=1e3)] = PlannerConfig.lane_slack_lead
+    """How many times more a plan's leaving its corridor (lane and obstacles) costs at the first
+    stage than at the horizon's end, geometrically in between, so that a plan that cannot keep
+    the corridor leaves it as late as it can; 1 (the default): the same price at every stage
+    (measured, not adopted: GT then deferred excursions that were real, docs/decisions/0089)."""
     reference_regain_limit: bool = PlannerConfig.reference_regain_limit
     """In cruise, the speed reference regains speed from the vehicle's own no faster than the
     drive's acceleration cap on the g-g ellipse allows (less while cornering); ``false``: the

@@ -333,6 +333,10 @@ class RunMeta(_Meta):
     """The planner's name if it is not the package's (a plug-in's, or the object's class)."""
     controller_plugin: str | None = None
     """The controller's name if it is not the package's."""
+    planner_backend: str | None = None
+    """The OCP solver the package's planner ran (``AcadosBackend``, ``CasadiBackend``): a planner
+    configured for acados that cannot load it runs the CasADi reference instead, and says so
+    here (None: a plug-in planner, or a record written before this field)."""
 
     @property
     def builtin(self) -> Configuration | None:
