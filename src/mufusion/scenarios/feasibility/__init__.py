@@ -3,7 +3,9 @@
 Planner-independent pure functions over plain numbers (SI units in every name):
 :func:`turn_feasibility` (the friction-limited speed profile of a point mass through the curve,
 ``v² κ ≤ λ μ(s) g``, with the friction changing before, at or inside it, along the lane centre
-and along the lines the lane's play allows) and
+and along the lines the lane's play allows; the lateral part capped where the vehicle's body,
+turned by its rear tire's slip, would no longer fit the lane:
+:mod:`~mufusion.scenarios.feasibility.attitude`) and
 :func:`popup_feasibility` (stop short of the obstacle, or steer around it). Each returns a frozen
 dataclass with a :class:`FeasibilityClass`, a signed margin in m/s (the highest entry speed at
 which the manoeuvre still fits, minus the entry speed) and the quantities used.
@@ -19,6 +21,7 @@ import math
 
 from mufusion.planner import PlannerConfig
 from mufusion.scenarios.config import AnyScenario, TurnScenario
+from mufusion.scenarios.feasibility.attitude import BodyInLane
 from mufusion.scenarios.feasibility.common import (
     MARGINAL_BAND_FRACTION,
     FeasibilityClass,
@@ -48,6 +51,7 @@ from mufusion.scenarios.road_kind import RoadScenario
 from mufusion.vehicle.braking import braking_limited_speed_mps
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import secant_stiffness_factor
+from mufusion.vehicle.surface_tires import tire_for_surface
 
 __all__ = [
     "MARGINAL_BAND_FRACTION",
@@ -104,6 +108,7 @@ def classify_scenario(cfg: AnyScenario, params: VehicleParams) -> Verdict:
             vehicle_length_m=params.length_m, max_decel_mps2=max_decel,
             front_axle_ahead_m=params.cog_to_front_axle_m,
             rear_axle_behind_m=params.cog_to_rear_axle_m,
+            body=_body(cfg, params, cfg.road.lane_width_m),
         )
     if isinstance(cfg, RoadScenario):
         return _classify_road(cfg, params, max_decel)
@@ -111,6 +116,14 @@ def classify_scenario(cfg: AnyScenario, params: VehicleParams) -> Verdict:
     lane = cfg.road.lane_width_m
     return _popup(cfg.initial_speed_mps, cfg.friction.mu, ob.distance_m, ob.length_m,
                   ob.width_m, ob.lateral_offset_m, 1.5 * lane, 0.5 * lane, lam, params, max_decel)
+
+
+def _body(cfg: AnyScenario, params: VehicleParams, lane_width_m: float) -> BodyInLane:
+    """The vehicle's body in its lane, on the tire the plant gives it at each μ."""
+    table = cfg.sim.surface_tires()
+    return BodyInLane.of(params, lane_width_m,
+                         None if table is None else
+                         (lambda mu: tire_for_surface(mu, params.tire, table)))
 
 
 def _popup(
@@ -144,6 +157,7 @@ def _classify_road(cfg: RoadScenario, params: VehicleParams, max_decel: float) -
         utilization_factor=lam, dead_time_s=params.torque_time_constant_s,
         max_decel_mps2=max_decel, front_axle_ahead_m=params.cog_to_front_axle_m,
         rear_axle_behind_m=params.cog_to_rear_axle_m,
+        body=_body(cfg, params, road.lane_width_m),
     )
     right, left = cfg.drivable_d_m()
     judged = []

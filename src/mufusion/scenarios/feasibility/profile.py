@@ -46,6 +46,8 @@ class Piece(NamedTuple):
 
 
 FrictionOfS = Callable[[float], float]
+LateralCap = Callable[[float, float], float]
+"""``(μ, κ) ->`` the highest lateral utilisation the line may use there (≤ 1)."""
 
 
 def line_position_m(pieces: Sequence[Piece], centre_s_m: float) -> float:
@@ -114,9 +116,13 @@ def lowest_friction(mu_of: FrictionOfS, start_m: float, end_m: float,
 
 def backward_profile(
     pieces: Sequence[Piece], mu_of: FrictionOfS, breakpoints: Sequence[float], lam: float,
-    max_decel_mps2: float,
+    max_decel_mps2: float, lateral_cap: LateralCap | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Backward pass over a line: the nodes s [m], ``v_max²`` and the pointwise limit ``v²``.
+
+    ``lateral_cap(μ, κ)`` bounds the lateral utilisation where it is below λ (the body's
+    attitude, :mod:`~mufusion.scenarios.feasibility.attitude`): ``v² κ ≤ min(λ, cap) μ g``;
+    braking keeps the whole circle's reach.
 
     Straights and arcs take one step (exact), clothoids steps of :data:`PROFILE_STEP_M`; every
     step is split at the friction's breakpoints, so μ is constant on each. A node's limit is the
@@ -134,7 +140,12 @@ def backward_profile(
     accel = [lam * mu_of(0.5 * (step[0] + step[1])) * GRAVITY_MPS2 for step in steps]
 
     def lim(a: float, kappa: float) -> float:
-        return a / kappa if kappa > 0.0 else math.inf
+        if kappa <= 0.0:
+            return math.inf
+        if lateral_cap is not None:
+            mu = a / (lam * GRAVITY_MPS2)
+            a = min(a, lateral_cap(mu, kappa) * mu * GRAVITY_MPS2)
+        return a / kappa
 
     # A node's limit is the tighter of its two sides, each with its own step's μ and curvature
     # there (a curvature jump counts at once; a change of μ at a jump pairs each μ with its own

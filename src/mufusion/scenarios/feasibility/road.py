@@ -26,6 +26,7 @@ import math
 from dataclasses import dataclass
 
 from mufusion.road import FrictionMap, Obstacle, ReferencePath
+from mufusion.scenarios.feasibility.attitude import BodyInLane
 from mufusion.scenarios.feasibility.common import FeasibilityClass
 from mufusion.scenarios.feasibility.popup import PopupFeasibility
 from mufusion.scenarios.feasibility.profile import FrictionOfS, Piece
@@ -96,10 +97,11 @@ def axle_friction(
 def path_limit(
     *, path: ReferencePath, friction: FrictionMap, start_s_m: float, entry_speed_mps: float,
     utilization_factor: float, dead_time_s: float, max_decel_mps2: float,
-    front_axle_ahead_m: float, rear_axle_behind_m: float,
+    front_axle_ahead_m: float, rear_axle_behind_m: float, body: BodyInLane | None = None,
 ) -> TurnLimit:
-    """The centre line's limit from the start (:func:`line_limit`); a path without a curve
-    ahead has no limit (``margin_mps`` = +inf)."""
+    """The centre line's limit from the start (:func:`line_limit`; ``body``: the rigid body
+    the lane must hold, None: a point mass); a path without a curve ahead has no limit
+    (``margin_mps`` = +inf)."""
     pieces = path_pieces(path, start_s_m)
     curvature = max((max(abs(p.kappa_start_1pm), abs(p.kappa_end_1pm)) for p in pieces),
                     default=0.0)
@@ -113,7 +115,8 @@ def path_limit(
     pieces = [piece for p in pieces for piece in _split_at_zero(p)]
     mu_of, points = axle_friction(friction, start_s_m, front_axle_ahead_m, rear_axle_behind_m)
     return line_limit("centreline", 1.0 / curvature, pieces, mu_of, points, entry_speed_mps,
-                      utilization_factor, dead_time_s, max_decel_mps2)
+                      utilization_factor, dead_time_s, max_decel_mps2,
+                      None if body is None else body.lateral_cap)
 
 
 def _split_at_zero(piece: Piece) -> list[Piece]:

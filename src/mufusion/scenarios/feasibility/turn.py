@@ -26,6 +26,7 @@ from typing import Literal
 import numpy as np
 from scipy.special import fresnel
 
+from mufusion.scenarios.feasibility.attitude import BodyInLane
 from mufusion.scenarios.feasibility.common import (
     GRAVITY_MPS2,
     FeasibilityClass,
@@ -35,6 +36,7 @@ from mufusion.scenarios.feasibility.common import (
 )
 from mufusion.scenarios.feasibility.profile import (
     FrictionOfS,
+    LateralCap,
     Piece,
     axle_span_friction,
     backward_profile,
@@ -155,12 +157,14 @@ def effective_radius_m(
 def line_limit(
     path: Literal["centreline", "outer", "cut"], radius_m: float, pieces: list[Piece],
     mu_of: FrictionOfS, breakpoints: tuple[float, ...], entry_speed_mps: float, lam: float,
-    dead_time_s: float, max_decel_mps2: float,
+    dead_time_s: float, max_decel_mps2: float, lateral_cap: LateralCap | None = None,
 ) -> TurnLimit:
     """The limit along one line of ``pieces`` from the vehicle's start (s = 0): the backward
-    profile, the highest entry speed cruising through the dead time, the braking point and the
-    margin at ``entry_speed_mps``; ``radius_m`` is reported as the line's radius."""
-    s, u, limit = backward_profile(pieces, mu_of, breakpoints, lam, max_decel_mps2)
+    profile (its lateral utilisation bounded by ``lateral_cap`` where that is below λ), the
+    highest entry speed cruising through the dead time, the braking point and the margin at
+    ``entry_speed_mps``; ``radius_m`` is reported as the line's radius."""
+    s, u, limit = backward_profile(pieces, mu_of, breakpoints, lam, max_decel_mps2,
+                                   lateral_cap)
     reach = np.minimum.accumulate(u)  # v² allowed for cruising from the start up to s
     v_max = max_entry_speed_mps(s, reach, dead_time_s, math.sqrt(u[0]))
     tight = int(np.argmin(limit))
@@ -206,6 +210,7 @@ def turn_feasibility(
     max_decel_mps2: float = math.inf,
     front_axle_ahead_m: float = 0.0,
     rear_axle_behind_m: float = 0.0,
+    body: BodyInLane | None = None,
 ) -> TurnFeasibility:
     """Whether a point mass can slow from ``entry_speed_mps`` to the curve's limit in time.
 
@@ -236,6 +241,11 @@ def turn_feasibility(
         Distances of the front and the rear axle from the centre of gravity [m], ≥ 0 (default
         0: a point at the centre of gravity). The point mass has the lower μ under its two
         axles, so a drop acts when the front axle reaches it, a rise once the rear has passed.
+    body
+        The rigid body the lane must hold (default None: a point mass): the lateral
+        utilisation is bounded where the body's attitude on its rear tire's slip would no longer
+        fit the lane (:mod:`~mufusion.scenarios.feasibility.attitude`). Judged with the whole
+        lane's width on every line, so the lines that use the play (cut, outer) err fast.
 
     Returns
     -------
@@ -282,6 +292,7 @@ def turn_feasibility(
         raise ValueError(f"clothoid_m must be <= radius_m * turn_angle_rad = "
                          f"{radius_m * turn_angle_rad:.3f} m, got {clothoid_m!r}")
 
+    cap: LateralCap | None = None if body is None else body.lateral_cap
     play = 0.5 * (lane_width_m - vehicle_width_m)
     play_outer = play - vehicle_length_m**2 / (8.0 * radius_m)
     shift, tangent_offset = clothoid_offsets_m(radius_m, clothoid_m)
@@ -290,7 +301,7 @@ def turn_feasibility(
                     pieces: list[Piece], mu_of: FrictionOfS,
                     points: tuple[float, ...]) -> TurnLimit:
         return line_limit(path, radius, pieces, mu_of, points, entry_speed_mps,
-                       utilization_factor, dead_time_s, max_decel_mps2)
+                          utilization_factor, dead_time_s, max_decel_mps2, cap)
 
     def friction_on(pieces: list[Piece]) -> tuple[FrictionOfS, tuple[float, ...]]:
         # The road's change point moved onto the line (later on a line outside the centre).
