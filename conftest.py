@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 from hypothesis import settings
 
@@ -40,3 +42,25 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
         return first, item.get_closest_marker("slow") is None
 
     items.sort(key=rank)
+
+
+# One BLAS thread per test process, as a scenario run and a campaign worker have (runner.py,
+# engines.py). OpenBLAS otherwise starts one thread per core in every process; with a worker per
+# core (``-n auto``) the threads of one wait, spinning, for cores the other worker holds. The
+# property tests that call the fusion directly took 70 s of CPU that way, 4 s with one thread each
+# (tests/fusion/test_shared_fusion.py and test_sender_cap.py, beside another job's two processes).
+# The limit holds for the whole session (the object is kept); tests/scenarios/test_runner_threads.py
+# raises it again around the run whose limit it checks.
+_BLAS_LIMIT: list[Any] = []
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Limit the BLAS pools where tests run: here, or in pytest-xdist's workers (not in the
+    controller that hands the tests out, which need not import NumPy for it)."""
+    if getattr(config.option, "tx", None) and not hasattr(config, "workerinput"):
+        return
+    import numpy  # noqa: F401  (loads NumPy's OpenBLAS, and SciPy's, before the limit)
+    import scipy.linalg  # noqa: F401
+    from threadpoolctl import threadpool_limits
+
+    _BLAS_LIMIT.append(threadpool_limits(limits=1, user_api="blas"))

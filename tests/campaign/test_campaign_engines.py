@@ -6,7 +6,10 @@ import json
 import signal
 import socket
 import subprocess
+import threading
 import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
@@ -49,6 +52,57 @@ def _campaign(tmp_path: Path, seeds: int) -> Path:
     path = tmp_path / "c.toml"
     path.write_text(CAMPAIGN.replace("seeds = 3", f"seeds = {seeds}"))
     return path
+
+
+NO_CLUSTER_TEST = "test_an_address_that_accepts_connections_but_is_no_cluster_fails_in_bounded_time"
+
+
+@dataclass
+class BackgroundCampaign:
+    """A campaign command started in the background; ``done`` is set when it has exited."""
+
+    address: str
+    proc: subprocess.Popen
+    started: float
+    done: threading.Event = field(default_factory=threading.Event)
+    output: str = ""
+    elapsed_s: float = float("nan")  # from its start to its exit
+
+
+@pytest.fixture(scope="module", autouse=True)
+def no_cluster_campaign(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory,
+) -> Iterator[BackgroundCampaign | None]:
+    """The campaign of :data:`NO_CLUSTER_TEST`, started as this module starts.
+
+    That command waits out the join's bound (``RAY_INIT_TIMEOUT_S``, 15 s) doing nothing; started
+    here it waits while the module's other tests run, and the test collects its exit, timed
+    from its start to its exit, as it would have timed it alone. Not started when that test is not
+    selected (``-m 'not slow'``, ``-k``).
+    """
+    if not any(item.name == NO_CLUSTER_TEST for item in request.session.items):
+        yield None
+        return
+    tmp_path = tmp_path_factory.mktemp("no_cluster")
+    # Something listens there (and Ray rewrites a loopback address to the node's own, where
+    # nothing does): ray.init alone retried for minutes.
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen()
+        address = f"127.0.0.1:{server.getsockname()[1]}"
+        cmd = mufusion_command("campaign", str(_campaign(tmp_path, seeds=2)), "--out",
+                               str(tmp_path / "out"), "--engine", "ray", "--address", address)
+        started = time.monotonic()
+        with isolated(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
+            run = BackgroundCampaign(address, proc, started)
+
+            def wait() -> None:
+                run.output, _ = proc.communicate()
+                run.elapsed_s = time.monotonic() - run.started
+                run.done.set()
+
+            threading.Thread(target=wait, daemon=True).start()
+            yield run  # leaving ``isolated`` kills whatever of it is left
 
 
 # Ray runs in a child process in its own session: the local instance's raylet, GCS and workers
@@ -139,19 +193,15 @@ def test_a_ray_address_where_nothing_answers_fails_in_bounded_time_naming_it(tmp
 
 
 @pytest.mark.slow
-def test_an_address_that_accepts_connections_but_is_no_cluster_fails_in_bounded_time(tmp_path):
-    # Something listens there (and Ray rewrites a loopback address to the node's own, where
-    # nothing does): ray.init alone retried for minutes.
-    with socket.socket() as server:
-        server.bind(("127.0.0.1", 0))
-        server.listen()
-        address = f"127.0.0.1:{server.getsockname()[1]}"
-        cmd = mufusion_command("campaign", str(_campaign(tmp_path, seeds=2)), "--out",
-                               str(tmp_path / "out"), "--engine", "ray", "--address", address)
-        started = time.monotonic()
-        with isolated(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
-            output, _ = proc.communicate(timeout=90)
-        elapsed = time.monotonic() - started
-    assert proc.returncode == 2, output
-    assert elapsed < RAY_INIT_TIMEOUT_S + 20.0, output  # the join's bound plus start-up
-    assert f"no Ray cluster answered at '{address}'" in " ".join(output.split())
+def test_an_address_that_accepts_connections_but_is_no_cluster_fails_in_bounded_time(
+    no_cluster_campaign: BackgroundCampaign | None,
+):
+    # The command started with the module (no_cluster_campaign): it has waited meanwhile.
+    run = no_cluster_campaign
+    assert run is not None
+    assert run.done.wait(timeout=max(0.0, run.started + 90.0 - time.monotonic())), \
+        "the command was still running after 90 s"
+    output = run.output
+    assert run.proc.returncode == 2, output
+    assert run.elapsed_s < RAY_INIT_TIMEOUT_S + 20.0, output  # the join's bound plus start-up
+    assert f"no Ray cluster answered at '{run.address}'" in " ".join(output.split())

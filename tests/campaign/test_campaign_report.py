@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pandas as pd
+import pytest
 from PIL import Image
 from typer.testing import CliRunner
 
@@ -42,9 +43,17 @@ def _campaign_dir(tmp_path, partial: bool = False):
     return out
 
 
-def test_campaign_report_writes_rates_intervals_heat_maps_and_html(tmp_path):
-    directory = _campaign_dir(tmp_path)
+@pytest.fixture(scope="module")
+def complete_campaign(tmp_path_factory):
+    """The complete synthetic campaign and the output of its report, made once for the module
+    (the tests below only read them)."""
+    directory = _campaign_dir(tmp_path_factory.mktemp("report"))
     result = CliRunner().invoke(app, ["campaign-report", str(directory)])
+    return directory, result
+
+
+def test_campaign_report_writes_rates_intervals_heat_maps_and_html(complete_campaign):
+    directory, result = complete_campaign
     assert result.exit_code == 0, result.output
     report = directory / "report"
     md = (report / "report.md").read_text()
@@ -101,11 +110,11 @@ def test_rates_are_split_by_the_oracles_class():
     assert rates_by_class_markdown(table.drop(columns="feasibility")) == []
 
 
-def test_campaign_report_opens_in_a_browser_with_every_image_loaded(tmp_path):
+def test_campaign_report_opens_in_a_browser_with_every_image_loaded(complete_campaign):
     from browser import load_in_browser
 
-    directory = _campaign_dir(tmp_path)
-    assert CliRunner().invoke(app, ["campaign-report", str(directory)]).exit_code == 0
+    directory, result = complete_campaign
+    assert result.exit_code == 0, result.output
     seen = load_in_browser(directory / "report" / "report.html")
     assert len(seen.images) >= 4, seen.images
     assert seen.broken_images == [] and seen.failed_requests == []

@@ -156,3 +156,14 @@ def test_the_problem_hash_names_the_slack_penalties():
     # The stage weights are written at each solve: they do not need new code.
     weights = dataclasses.replace(CONFIG.weights, speed=2.0)
     assert acados_backend.problem_hash(TRUCK, dataclasses.replace(CONFIG, weights=weights)) == base
+
+
+def test_each_acados_install_gets_its_own_solvers(monkeypatch):
+    """A compiled solver links the acados libraries of the install that built it; a cache
+    shared by two installs (two virtual environments) must not hand one's solver to the other,
+    which fails to load once the first install is gone."""
+    monkeypatch.setenv("ACADOS_SOURCE_DIR", "/venv-a/lib/python3.11/site-packages/acados")
+    first = acados_backend.problem_hash(TRUCK, CONFIG)
+    assert acados_backend.problem_hash(TRUCK, CONFIG) == first
+    monkeypatch.setenv("ACADOS_SOURCE_DIR", "/venv-b/lib/python3.11/site-packages/acados")
+    assert acados_backend.problem_hash(TRUCK, CONFIG) != first

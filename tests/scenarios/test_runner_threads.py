@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from threadpoolctl import threadpool_info
+from threadpoolctl import threadpool_info, threadpool_limits
 
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
@@ -18,7 +18,11 @@ def test_run_uses_one_blas_thread() -> None:
     def spy(t_s: float) -> None:  # called inside the run, after each planning step
         seen.append(_blas_threads())
 
-    before = _blas_threads()
-    run_scenario(load_scenario("popup", ["duration_s=0.6"]), "GT", progress=spy)
-    assert seen and seen[0] and all(n == 1 for n in seen[0])
-    assert _blas_threads() == before
+    # The test session keeps one BLAS thread (root conftest.py): two pools here, so that the run's
+    # limit to one and its restoring of the pools afterwards are both seen.
+    with threadpool_limits(limits=2, user_api="blas"):
+        before = _blas_threads()
+        assert before and all(n == 2 for n in before)
+        run_scenario(load_scenario("popup", ["duration_s=0.6"]), "GT", progress=spy)
+        assert seen and seen[0] and all(n == 1 for n in seen[0])
+        assert _blas_threads() == before

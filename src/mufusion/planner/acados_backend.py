@@ -7,6 +7,7 @@ import hashlib
 import io
 import json
 import logging
+import os
 from importlib import resources
 from types import ModuleType
 
@@ -80,6 +81,11 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
                                 config.weights.speed_ceiling_l1, config.weights.speed_ceiling_l2],
             "rk4_steps": stage_steps(config, params),
             "iterate": _ITERATE_HEADER + _ITERATE_SOURCE,
+            # The compiled solver links the acados libraries of the install that built it: a
+            # cache shared by two installs (two virtual environments) keeps one solver each,
+            # and one whose install is gone is never loaded (it failed to load, and the planner
+            # fell back to CasADi).
+            "acados_install": os.environ.get("ACADOS_SOURCE_DIR", ""),
         },
         sort_keys=True,
     )
