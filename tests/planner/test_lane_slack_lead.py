@@ -9,12 +9,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from mufusion.planner.ocp import Param, PlannerConfig
+from mufusion.planner.ocp import PlannerConfig
 from mufusion.planner.penalties import corridor_slack_scale
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import planner_config
-from mufusion.vehicle.params import GRAVITY_MPS2, TRUCK
-from mufusion.vehicle.planner_model import N_STATES, State, normal_loads_n
+from mufusion.vehicle.params import TRUCK
+from mufusion.vehicle.planner_model import State
+from ocp_problems import cruise_problem
 
 CONFIG = PlannerConfig(horizon_steps=20)
 HALF = 10  # stages 1 … HALF: the first half of the horizon
@@ -44,23 +45,11 @@ def test_the_scenario_key_reaches_the_planner_and_is_validated() -> None:
 
 def _corridor_problem(cfg: PlannerConfig, speed_mps: float = 20.0, mu: float = 0.9):
     n = cfg.horizon_steps
-    guess_x = np.zeros((n + 1, N_STATES))
-    guess_x[:, State.vx] = speed_mps
-    guess_x[:, State.s] = speed_mps * cfg.dt_s * np.arange(n + 1)
-    p = np.zeros((n, len(Param)))
-    p[:, Param.utilized_friction] = cfg.utilization_factor * mu
-    p[:, Param.radius_front] = p[:, Param.radius_rear] = mu * TRUCK.mass_kg * GRAVITY_MPS2
-    guess_load = p[:, Param.radius_rear] / p[:, Param.utilized_friction]
-    p[:, Param.rear_stiffness] = 3e5 * guess_load / normal_loads_n(0.0, TRUCK)[1]
-    yref = np.zeros((n + 1, N_STATES + 3))
-    yref[:, State.vx] = speed_mps
-    weights = np.ones(N_STATES + 3)
-    weights[State.s], weights[N_STATES:] = 0.0, 1e-8
     # d_lo/d_hi bound stages 1 … N (index k: stage k + 1): ±0.1 m up to the last stage, which
     # lies in a gate 6 m to the left, out of reach (priced as the first stage's without a lead).
     d_lo, d_hi = np.full(n, -0.1), np.full(n, 0.1)
     d_lo[-1], d_hi[-1] = 6.0, 6.5
-    return guess_x, np.zeros((n, 3)), p, yref, weights, d_lo, d_hi
+    return (*cruise_problem(cfg, speed_mps, mu), d_lo, d_hi)
 
 
 def _plan(backend_name: str, lead: float) -> np.ndarray:

@@ -14,7 +14,8 @@ from mufusion.planner.ocp import MAX_SPEED_MPS, Param, PlannerConfig
 from mufusion.planner.penalties import slack_penalties
 from mufusion.planner.stability import state_bounds
 from mufusion.vehicle.params import GRAVITY_MPS2, TRUCK
-from mufusion.vehicle.planner_model import N_STATES, State, normal_loads_n
+from mufusion.vehicle.planner_model import N_STATES, State
+from ocp_problems import cruise_problem
 
 CONFIG = PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=3.95, speed_ceiling=True)
 
@@ -51,26 +52,9 @@ def test_the_ceiling_is_priced_below_the_lane_and_the_minimum_speed_as_the_lane(
     np.testing.assert_array_equal(plain.linear_stage_upper, plain.linear_stage)
 
 
-def _cruise_problem(cfg: PlannerConfig, speed_mps: float, mu: float):
-    n = cfg.horizon_steps
-    guess_x = np.zeros((n + 1, N_STATES))
-    guess_x[:, State.vx] = speed_mps
-    guess_x[:, State.s] = speed_mps * cfg.dt_s * np.arange(n + 1)
-    p = np.zeros((n, len(Param)))
-    p[:, Param.utilized_friction] = cfg.utilization_factor * mu
-    p[:, Param.radius_front] = p[:, Param.radius_rear] = mu * TRUCK.mass_kg * GRAVITY_MPS2
-    guess_load = p[:, Param.radius_rear] / p[:, Param.utilized_friction]
-    p[:, Param.rear_stiffness] = 3e5 * guess_load / normal_loads_n(0.0, TRUCK)[1]
-    yref = np.zeros((n + 1, N_STATES + 3))
-    yref[:, State.vx] = speed_mps
-    weights = np.ones(N_STATES + 3)
-    weights[State.s], weights[N_STATES:] = 0.0, 1e-8
-    return guess_x, np.zeros((n, 3)), p, yref, weights
-
-
 def _solve(backend, cfg, ceiling, iterations, speed_mps=20.0, mu=0.9):
     n = cfg.horizon_steps
-    guess_x, guess_u, p, yref, weights = _cruise_problem(cfg, speed_mps, mu)
+    guess_x, guess_u, p, yref, weights = cruise_problem(cfg, speed_mps, mu)
     x0 = guess_x[0].copy()
     for _ in range(iterations):
         status, xs, us = backend.solve(x0, guess_x, guess_u, p, yref, weights,
@@ -151,7 +135,7 @@ def test_the_iteration_passes_the_reference_as_ceiling_in_cruise_only(mode, enab
 
     cfg = dataclasses.replace(CONFIG, horizon_steps=20, speed_ceiling=enabled)
     n, mu = cfg.horizon_steps, 0.9
-    guess_x, guess_u, *_ = _cruise_problem(cfg, 20.0, mu)
+    guess_x, guess_u, *_ = cruise_problem(cfg, 20.0, mu)
     x0 = guess_x[0].copy()
     x0[State.vx] = 22.0  # above the cruise reference: the first stages descend from it
     # A curve 60 m ahead: the reference brakes inside the horizon.
