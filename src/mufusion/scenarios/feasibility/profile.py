@@ -137,21 +137,20 @@ def backward_profile(
     steps = _steps(pieces, breakpoints)
     nodes = [steps[0][0]] + [step[1] for step in steps]
     # μ on the step (s_i, s_i+1) is its midpoint's (the breakpoints split the steps).
-    accel = [lam * mu_of(0.5 * (step[0] + step[1])) * GRAVITY_MPS2 for step in steps]
+    mus = [mu_of(0.5 * (step[0] + step[1])) for step in steps]
+    accel = [lam * mu * GRAVITY_MPS2 for mu in mus]
 
-    def lim(a: float, kappa: float) -> float:
+    def lim(mu: float, kappa: float) -> float:
         if kappa <= 0.0:
             return math.inf
-        if lateral_cap is not None:
-            mu = a / (lam * GRAVITY_MPS2)
-            a = min(a, lateral_cap(mu, kappa) * mu * GRAVITY_MPS2)
-        return a / kappa
+        share = lam if lateral_cap is None else min(lam, lateral_cap(mu, kappa))
+        return share * mu * GRAVITY_MPS2 / kappa
 
     # A node's limit is the tighter of its two sides, each with its own step's μ and curvature
     # there (a curvature jump counts at once; a change of μ at a jump pairs each μ with its own
     # side's curvature).
-    left = [math.inf] + [lim(a, step[3]) for a, step in zip(accel, steps, strict=True)]
-    right = [lim(a, step[2]) for a, step in zip(accel, steps, strict=True)] + [math.inf]
+    left = [math.inf] + [lim(mu, step[3]) for mu, step in zip(mus, steps, strict=True)]
+    right = [lim(mu, step[2]) for mu, step in zip(mus, steps, strict=True)] + [math.inf]
     limit = [min(a, b) for a, b in zip(left, right, strict=True)]
     u = [0.0] * len(nodes)
     u[-1] = limit[-1]
