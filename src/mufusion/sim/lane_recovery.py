@@ -30,6 +30,12 @@ from mufusion.sim.supervisor import PlanningContext, Supervisor
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import State
 
+TOP_FIRST_ITERATIONS = 2
+"""RTI iterations the most relaxed candidate gets before the top-first search concludes that
+nothing helps: the ascending search reaches it after one per step below it, and one iteration
+from the friction-limited plan ranked it worse where those four ranked it better
+(docs/decisions/0091)."""
+
 
 class RecoveryOutcome(StrEnum):
     """What one step of lane recovery did (each is a ``lane_recovery`` event but ``BRAKING``, a
@@ -216,13 +222,37 @@ class LaneRecovery(Supervisor):
                     gap_short)
 
         best = (rank(plan, before), before, plan, planned_with, held, self.planner.memory)
-        for alpha in (a for a in alphas if a > held):
+        search = [a for a in alphas if a > held]
+        if mode == "evade" and self.settings.evade_top_first and len(search) > 1:
+            # The most relaxed candidate first, from the friction-limited plan: one that does
+            # no better leaves nothing for the smaller relaxations to find, and the search ends
+            # after one solve instead of one per step (docs/decisions/0091). One that does
+            # better is kept as a candidate, and the smaller ones follow from the
+            # friction-limited plan as before, so the smallest that suffices is adopted.
+            start = self.planner.memory
+            top = search.pop()
+            relaxed = self._relaxed(estimate, top)
+            assert relaxed is not None
+            helps = False
+            for _ in range(TOP_FIRST_ITERATIONS):
+                candidate = ctx.plan(relaxed, mode)
+                violation = self.footprint_violation_m(candidate)
+                key = rank(candidate, violation)
+                helps = not candidate.fallback and key < best[0]
+                if helps:
+                    best = (key, violation, candidate, relaxed, top, self.planner.memory)
+                    break
+            self.planner.restore(start)
+            if not helps:
+                search = []
+        for alpha in search:
             relaxed = self._relaxed(estimate, alpha)
             assert relaxed is not None
             candidate = ctx.plan(relaxed, mode)
             violation = self.footprint_violation_m(candidate)
             key = rank(candidate, violation)
-            if not candidate.fallback and key < best[0]:
+            # Ranked equal, the smaller relaxation (the top candidate's is the largest).
+            if not candidate.fallback and (key, alpha) < (best[0], best[4]):
                 best = (key, violation, candidate, relaxed, alpha, self.planner.memory)
             if not candidate.fallback and violation <= tolerance and not (key[0] or key[2]):
                 break

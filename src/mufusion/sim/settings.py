@@ -106,6 +106,11 @@ class LaneRecoverySettings:
     # Evading, when every candidate hits the obstacle and the plan at the posterior's upper
     # 95 % edge passes it: drive that plan, not a candidate predicted to hit (0086).
     evade_at_upper_edge: bool = True
+    # Evading, the candidate with the most relaxation is planned first: where it does no better
+    # than the friction-limited plan the search ends there (one solve, not one per step); where
+    # it does better the smaller ones follow in increasing order as before, and the smallest
+    # that keeps the lane and the obstacle's margin is adopted (docs/decisions/0091).
+    evade_top_first: bool = False
     # Evading, the share of the planner's obstacle margin a plan must keep: one passing closer
     # has met its friction limit and is searched on like one leaving the lane. Plans at the
     # estimate's limit keep their corridor's gap to within centimetres (0.44-0.46 m of 0.5 m
@@ -120,6 +125,9 @@ class LaneRecoverySettings:
         if not isinstance(self.brake_when_futile, bool):
             raise ValueError("lane_recovery.brake_when_futile must be true or false, "
                              f"got {self.brake_when_futile!r}")
+        if not isinstance(self.evade_top_first, bool):
+            raise ValueError("lane_recovery.evade_top_first must be true or false, "
+                             f"got {self.evade_top_first!r}")
         if not isinstance(self.evade_at_upper_edge, bool):
             raise ValueError("lane_recovery.evade_at_upper_edge must be true or false, "
                              f"got {self.evade_at_upper_edge!r}")
