@@ -23,6 +23,7 @@ from mufusion.sim.supervision import (
     planned_footprint_violation_m,
     planned_obstacle_clearance_m,
     planned_obstacle_hit,
+    planned_obstacle_shortfall_m,
     plausible_estimate,
     relaxed_estimate,
 )
@@ -360,6 +361,34 @@ def test_planned_obstacle_hit_agrees_with_the_clearance() -> None:
     x[:, State.d] = np.nan
     assert planned_obstacle_hit(x, obstacles, TRUCK) is False
     assert planned_obstacle_hit(x, [], TRUCK) is False
+
+
+def test_planned_obstacle_shortfall_is_the_clearances_bit_for_bit() -> None:
+    # The same sweeps, and a margin each: every plan's shortfall must equal max(0, margin −
+    # clearance) exactly (lane recovery ranks candidates by it), whether it passes far, within
+    # the margin or through the obstacle, and for a moving obstacle.
+    from mufusion.planner import PlannerObstacle
+
+    rng = np.random.default_rng(11)
+    still = [PlannerObstacle(s_m=30.0, d_m=0.4, length_m=1.0, width_m=1.5),
+             PlannerObstacle(s_m=45.0, d_m=-1.0, length_m=4.0, width_m=2.0)]
+    moving = [PlannerObstacle(s_m=40.0, d_m=0.0, length_m=4.5, width_m=1.8, speed_mps=-10.0)]
+    kinds = set()
+    for obstacles, dt in ((still, 0.0), (moving, 0.1)):
+        for x in _random_plans(rng, 300):
+            margin = float(rng.choice([0.25, 0.5, 2.0]))
+            shortfall = planned_obstacle_shortfall_m(x, obstacles, TRUCK, margin, dt)
+            gap = planned_obstacle_clearance_m(x, obstacles, TRUCK, dt)
+            assert shortfall == max(0.0, margin - gap)
+            kinds.add("hit" if gap < 0.0 else "within" if gap < margin else "clear")
+    assert kinds == {"hit", "within", "clear"}
+    x = next(_random_plans(rng, 1))
+    x[3, State.d] = np.nan  # non-finite: the full computation's answer
+    gap = planned_obstacle_clearance_m(x, still, TRUCK)
+    expected = max(0.0, 0.5 - gap)
+    got = planned_obstacle_shortfall_m(x, still, TRUCK, 0.5)
+    assert got == expected or (np.isnan(got) and np.isnan(expected))
+    assert planned_obstacle_shortfall_m(x, [], TRUCK, 0.5) == 0.0
 
 
 @pytest.mark.slow

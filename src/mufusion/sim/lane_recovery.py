@@ -21,6 +21,7 @@ from mufusion.sim.supervision import (
     planned_footprint_violation_m,
     planned_obstacle_clearance_m,
     planned_obstacle_hit,
+    planned_obstacle_shortfall_m,
     planned_rear_overuse,
     plausible_estimate,
     relaxation_gain,
@@ -332,9 +333,8 @@ class LaneRecovery(Supervisor):
             return lambda plan: 0.0
 
         def shortfall(plan: Plan) -> float:
-            gap = planned_obstacle_clearance_m(plan.states, ctx.obstacles, self.params,
-                                               plan.dt_s)
-            return max(0.0, margin - gap)
+            return planned_obstacle_shortfall_m(plan.states, ctx.obstacles, self.params,
+                                                margin, plan.dt_s)
 
         return shortfall
 

@@ -119,6 +119,63 @@ def planned_obstacle_clearance_m(
                for box in _obstacle_corners(obstacles, len(s), dt_s))
 
 
+def planned_obstacle_shortfall_m(
+    states: np.ndarray,
+    obstacles: Sequence[PlannerObstacle],
+    params: VehicleParams,
+    margin_m: float,
+    dt_s: float = 0.0,
+) -> float:
+    """How much closer than ``margin_m`` a plan's predicted footprints come to the obstacles
+    [m]: ``max(0, margin_m − planned_obstacle_clearance_m(...))``, the same value bit for bit,
+    computed only for the states that can come that close.
+
+    A footprint's gap to an (axis-aligned) obstacle is at least the gap between its bounding box
+    and the obstacle, so a state whose box stays ``margin_m`` (and a nanometre's rounding band)
+    away cannot change the result: the exact clearance is computed for the others only, and
+    without them the shortfall is 0. Non-finite input takes the full computation.
+
+    Examples
+    --------
+    >>> from mufusion.planner import PlannerObstacle
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> x = np.zeros((2, 6)); x[:, State.s] = [0.0, 14.0]
+    >>> ob = [PlannerObstacle(s_m=20.0, d_m=0.0, length_m=1.0, width_m=1.0)]
+    >>> gap = planned_obstacle_clearance_m(x, ob, TRUCK)
+    >>> planned_obstacle_shortfall_m(x, ob, TRUCK, 0.5) == max(0.0, 0.5 - gap)
+    True
+    >>> planned_obstacle_shortfall_m(x[:1], ob, TRUCK, 0.5)
+    0.0
+    """
+    if not obstacles or not margin_m > 0.0:
+        return max(0.0, margin_m - planned_obstacle_clearance_m(states, obstacles, params, dt_s))
+    x = np.asarray(states, dtype=float)
+    boxes = _obstacle_corners(obstacles, len(x), dt_s)
+    if not (np.all(np.isfinite(x)) and all(np.all(np.isfinite(box)) for box in boxes)):
+        return max(0.0, margin_m - planned_obstacle_clearance_m(x, obstacles, params, dt_s))
+    s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
+    ahead = params.body_centre_ahead_of_cog_m
+    ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
+                            params.length_m, params.width_m)
+    ego_lo, ego_hi = ego.min(axis=-2), ego.max(axis=-2)
+    reach = margin_m + _ROUNDING_BAND_M
+    gap = math.inf
+    for box in boxes:
+        # Per axis, how far apart the boxes are (0 where their extents overlap).
+        apart = np.maximum(np.maximum(box.min(axis=-2) - ego_hi, ego_lo - box.max(axis=-2)), 0.0)
+        near = np.hypot(apart[:, 0], apart[:, 1]) < reach
+        if np.any(near):
+            gap = min(gap, float(np.min(signed_clearance_m(
+                ego[near], box[near] if box.ndim == 3 else box))))
+    return max(0.0, margin_m - gap)
+
+
+_ROUNDING_BAND_M = 1e-9
+"""Beyond the margin, the bounding-box gap a state must keep to be left out of the exact
+clearance: far above the rounding of the distances (≈ 1e-14 m at road scale), so a state left
+out never has an exact clearance below the margin."""
+
+
 def _obstacle_corners(
     obstacles: Sequence[PlannerObstacle], rows: int, dt_s: float
 ) -> list[np.ndarray]:

@@ -102,6 +102,9 @@ from mufusion.fusion import Z95, declared_central_value, declared_upper_bound, l
 from mufusion.sim.plan_checks import planned_footprint_violation_m as planned_footprint_violation_m
 from mufusion.sim.plan_checks import planned_obstacle_clearance_m as planned_obstacle_clearance_m
 from mufusion.sim.plan_checks import planned_obstacle_hit as planned_obstacle_hit
+from mufusion.sim.plan_checks import (
+    planned_obstacle_shortfall_m as planned_obstacle_shortfall_m,
+)
 from mufusion.sim.plan_checks import planned_rear_overuse as planned_rear_overuse
 from mufusion.sim.settings import LaneRecoverySettings as LaneRecoverySettings
 from mufusion.sim.settings import ProbingSettings
