@@ -114,3 +114,28 @@ def test_a_closed_loop_run_logs_its_moment_and_sums_it_in_the_summary() -> None:
             assert active_s > 0.0 and moments.min() < 0.0  # against the leftward rotation
         else:
             assert active_s == 0.0 and not moments.any()
+
+
+def test_with_drive_cut_it_withholds_drive_only_while_the_rear_is_swung_out() -> None:
+    # The truck turning left at 20 m/s, rear drive torque asked: with the body slip 0.1 rad
+    # against the rotation (the rear out, beyond the 0.05 rad deadband) the drive cut keeps the
+    # rear's torque from building up; within the deadband, or without the cut, it builds up.
+    def rear_torque_after(body_slip_rad: float, drive_cut: bool) -> tuple[float, float]:
+        x0 = initial_state(TRUCK, 0.0, 0.0, 0.0, 20.0)
+        x0[4] = 20.0 * body_slip_rad  # v_y: β = v_y / v_x
+        x0[5] = 0.25  # a left turn's yaw rate [rad/s]
+        plant = Plant(TRUCK, x0, stability_control=StabilityControlSettings(drive_cut=drive_cut))
+        for _ in range(20):  # 0.1 s
+            out = plant.step(ActuatorCommand(0.05, 0.0, 3000.0), 0.9, 0.9)
+        assert plant._esc is not None
+        return float(out.x[10]), plant._esc.drive_cut_s
+
+    out_torque, cut_s = rear_torque_after(-0.1, True)
+    assert out_torque <= 0.0 and cut_s > 0.0
+    for slip, cut in ((-0.1, False), (-0.02, True)):
+        torque, cut_s = rear_torque_after(slip, cut)
+        assert torque > 500.0 and cut_s == 0.0
+    with pytest.raises(ValueError, match="drive_cut"):
+        StabilityControlSettings(drive_cut=1)  # type: ignore[arg-type]
+    assert load_scenario("turn", ["sim.esc_drive_cut=true"]).sim.stability_control() == (
+        StabilityControlSettings(drive_cut=True))

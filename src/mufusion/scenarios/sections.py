@@ -246,6 +246,10 @@ class SimSettings(_Strict):
     """Yaw stability control in the vehicle (:mod:`mufusion.vehicle.stability_control`): a yaw
     moment from braking one front wheel when the vehicle rotates faster than its steering asks,
     as on every production car and truck; ``false`` shows what it does (docs/decisions/0082)."""
+    esc_drive_cut: bool = False
+    """ESC also withholds drive torque while the rear is swung out beyond its body-slip
+    deadband (production ESC's engine intervention); measured, not adopted
+    (docs/decisions/0092)."""
 
     def surface_tires(self) -> SurfaceTireTable | None:
         """The plant's tire table (``None`` for the default tire)."""
@@ -260,7 +264,7 @@ class SimSettings(_Strict):
 
     def stability_control(self) -> StabilityControlSettings | None:
         """The vehicle's yaw stability control (``None`` with ``esc`` off)."""
-        return StabilityControlSettings() if self.esc else None
+        return StabilityControlSettings(drive_cut=self.esc_drive_cut) if self.esc else None
 
 
 class InitialPerturbation(_Strict):

@@ -348,15 +348,18 @@ class Plant:
                 cmd, omega_f0, omega_r0, self._accel_x_mps2, x0.torque_front_nm,
                 x0.torque_rear_nm, self.time_s,
             )
-        kernel_cmd: tuple[float, ...] = cmd
         yaw_moment = force_x = 0.0
         if self._esc is not None:
+            speed, slip = math.hypot(x0.vx_mps, x0.vy_mps), math.atan2(x0.vy_mps, x0.vx_mps)
+            if (cmd[1] > 0.0 or cmd[2] > 0.0) and self._esc.cuts_drive(
+                    speed, x0.yaw_rate_radps, slip):
+                cmd = (cmd[0], min(cmd[1], 0.0), min(cmd[2], 0.0))
+                self._esc.drive_cut_s += self.dt_s
             yaw_moment, force_x = self._esc.moment(
-                math.hypot(x0.vx_mps, x0.vy_mps), x0.yaw_rate_radps, x0.steer_rad,
-                self._accel_y_mps2, mu_front, math.atan2(x0.vy_mps, x0.vx_mps))
+                speed, x0.yaw_rate_radps, x0.steer_rad, self._accel_y_mps2, mu_front, slip)
             if yaw_moment != 0.0:
                 self._esc.active_s += self.dt_s
-                kernel_cmd = (*cmd, yaw_moment, force_x)
+        kernel_cmd: tuple[float, ...] = (*cmd, yaw_moment, force_x) if yaw_moment else cmd
         # The surface under each axle is held over the step (μ is too).
         tire_f = tire_for_surface(mu_front, p.tire, self.surface_tires)
         tire_r = tire_for_surface(mu_rear, p.tire, self.surface_tires)

@@ -58,9 +58,17 @@ class StabilityControlSettings:
     body_slip_deadband_rad: float = 0.05
     response_time_s: float = 0.2
     min_speed_mps: float = 3.0
+    drive_cut: bool = False
+    """Also withhold drive torque while the body slip points against the rotation beyond
+    ``body_slip_deadband_rad`` (the rear swung out): production ESC's engine intervention
+    (docs/decisions/0092)."""
 
     def __post_init__(self) -> None:
+        if not isinstance(self.drive_cut, bool):
+            raise ValueError(f"drive_cut must be true or false, got {self.drive_cut!r}")
         for f in fields(self):
+            if f.name == "drive_cut":
+                continue
             value = getattr(self, f.name)
             if isinstance(value, bool) or not (
                 isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0
@@ -94,6 +102,15 @@ class YawStabilityController:
             0.5 * params.mass_kg * GRAVITY_MPS2 * params.cog_to_rear_axle_m / wheelbase)
         self.active_s = 0.0
         """How long the controller has acted so far [s] (summed over the steps it acted in)."""
+        self.drive_cut_s = 0.0
+        """How long it has withheld drive torque so far [s] (``drive_cut``)."""
+
+    def cuts_drive(self, speed_mps: float, yaw_rate_radps: float, body_slip_rad: float) -> bool:
+        """Whether the drive torque is withheld for the coming plant step (``drive_cut``)."""
+        cfg = self.settings
+        return (cfg.drive_cut and speed_mps > cfg.min_speed_mps
+                and -body_slip_rad * math.copysign(1.0, yaw_rate_radps)
+                > cfg.body_slip_deadband_rad)
 
     def moment(
         self, speed_mps: float, yaw_rate_radps: float, steer_rad: float, accel_y_mps2: float,
