@@ -351,8 +351,8 @@ class Plant:
         yaw_moment = force_x = 0.0
         if self._esc is not None:
             speed, slip = math.hypot(x0.vx_mps, x0.vy_mps), math.atan2(x0.vy_mps, x0.vx_mps)
-            if (cmd[1] > 0.0 or cmd[2] > 0.0) and self._esc.cuts_drive(
-                    speed, x0.yaw_rate_radps, slip):
+            if self._esc.settings.drive_cut and (cmd[1] > 0.0 or cmd[2] > 0.0) and (
+                    self._esc.cuts_drive(speed, x0.yaw_rate_radps, slip)):
                 cmd = (cmd[0], min(cmd[1], 0.0), min(cmd[2], 0.0))
                 self._esc.drive_cut_s += self.dt_s
             yaw_moment, force_x = self._esc.moment(

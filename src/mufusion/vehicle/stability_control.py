@@ -106,9 +106,10 @@ class YawStabilityController:
         """How long it has withheld drive torque so far [s] (``drive_cut``)."""
 
     def cuts_drive(self, speed_mps: float, yaw_rate_radps: float, body_slip_rad: float) -> bool:
-        """Whether the drive torque is withheld for the coming plant step (``drive_cut``)."""
+        """Whether the rear is swung out so that ``drive_cut`` withholds drive torque for the coming
+        plant step (the caller checks ``settings.drive_cut``)."""
         cfg = self.settings
-        return (cfg.drive_cut and speed_mps > cfg.min_speed_mps
+        return (speed_mps > cfg.min_speed_mps
                 and -body_slip_rad * math.copysign(1.0, yaw_rate_radps)
                 > cfg.body_slip_deadband_rad)
 
