@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import signal
 import time
 from pathlib import Path
@@ -152,7 +153,9 @@ def reproduce(
     runs, ablation_runs = all_runs[: len(specs)], all_runs[len(specs):]
     run_dirs = {(spec.variant, spec.config): directory
                 for spec, _m, directory in results[: len(specs)]}
-    figures = reproduction_figures(run_dirs, out / "figures", gif=gif)
+    # The figures in as many processes as the runs had (one per core by default).
+    figures = reproduction_figures(run_dirs, out / "figures", gif=gif,
+                                   jobs=jobs or os.cpu_count() or 1)
     elapsed = time.perf_counter() - started
     summary = {"runs": runs, "elapsed_s": round(elapsed, 1)}
     if ablation_runs:

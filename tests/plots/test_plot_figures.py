@@ -211,3 +211,24 @@ def test_a_moving_obstacle_is_drawn_where_it_is_at_that_time(saved_log) -> None:
     (patch,) = _by_gid(ax, "obstacle")
     assert patch.get_xy()[:, 0].min() == pytest.approx(18.0)
     plt.close(fig)
+
+
+def test_reproduction_figures_are_the_same_files_from_one_worker_or_two(
+    saved_log, tmp_path: Path
+) -> None:
+    from mufusion.plots.run_figures import reproduction_figures
+
+    # Two variants of saved synthetic runs: with two workers each draws one; the files must
+    # be the same bytes as one worker draws them in turn.
+    run_dirs = {}
+    for key in ("popup-paper", "popup-authors"):
+        for config in ("GT", "P", "F"):
+            run_dirs[(key, config)] = saved_log("popup", config, duration_s=1.0).save(
+                tmp_path / "runs" / f"{key}-{config}")
+    one = reproduction_figures(run_dirs, tmp_path / "one", gif=False, jobs=1)
+    two = reproduction_figures(run_dirs, tmp_path / "two", gif=False, jobs=2)
+    assert list(one) == list(two) and len(one) >= 8
+    for name, path in one.items():
+        assert _is_png(path) and path.read_bytes() == two[name].read_bytes(), name
+    with pytest.raises(ValueError, match="jobs"):
+        reproduction_figures(run_dirs, tmp_path / "none", jobs=0)

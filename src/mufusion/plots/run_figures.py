@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from itertools import repeat
 from pathlib import Path
 
 from mufusion.configurations import Configuration
@@ -99,8 +101,19 @@ def variant_figures(
     return figures
 
 
+def _variant_figures_from_runs(
+    key: str, run_dirs: Mapping[str, Path], out_dir: Path, gif: bool
+) -> dict[str, Path]:
+    """:func:`variant_figures` of the variant ``key`` from its saved runs (``configuration
+    name → run directory``): what one worker of :func:`reproduction_figures` does."""
+    logs = {Configuration.parse(config): load_run(directory)
+            for config, directory in run_dirs.items()}
+    return variant_figures(variant(key), logs, out_dir, gif=gif)
+
+
 def reproduction_figures(
-    run_dirs: Mapping[tuple[str, str], Path], out_dir: Path, *, gif: bool = True
+    run_dirs: Mapping[tuple[str, str], Path], out_dir: Path, *, gif: bool = True,
+    jobs: int = 1,
 ) -> dict[str, Path]:
     """Figures of the reproduction, per variant, like the paper's Fig. 3 and Fig. 4.
 
@@ -112,12 +125,30 @@ def reproduction_figures(
         Where the figures go (created if needed).
     gif
         Whether to write the animations of the variants that have them.
+    jobs
+        Worker processes (≥ 1): the variants' figures are independent, and drawing them took
+        as long as the runs (docs/performance-tests.md). The files are the same either way.
+
+    Raises
+    ------
+    ValueError
+        If ``jobs`` < 1.
     """
+    if jobs < 1:
+        raise ValueError(f"jobs must be >= 1, got {jobs}")
     out_dir.mkdir(parents=True, exist_ok=True)
-    groups: dict[str, dict[Configuration, RunLog]] = {}
+    groups: dict[str, dict[str, Path]] = {}
     for (key, config), directory in run_dirs.items():
-        groups.setdefault(key, {})[Configuration.parse(config)] = load_run(directory)
+        groups.setdefault(key, {})[config] = directory
+    workers = min(jobs, len(groups))
+    if workers <= 1:
+        per_variant = [_variant_figures_from_runs(key, dirs, out_dir, gif)
+                       for key, dirs in groups.items()]
+    else:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            per_variant = list(pool.map(_variant_figures_from_runs, groups,
+                                        groups.values(), repeat(out_dir), repeat(gif)))
     figures: dict[str, Path] = {}
-    for key, logs in groups.items():
-        figures.update(variant_figures(variant(key), logs, out_dir, gif=gif))
+    for found in per_variant:
+        figures.update(found)
     return figures
