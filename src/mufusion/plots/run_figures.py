@@ -8,6 +8,7 @@ Fig. 4: P vs F at s = 0, 2, 18, 40 m).
 from __future__ import annotations
 
 import math
+import signal
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from itertools import repeat
@@ -101,6 +102,12 @@ def variant_figures(
     return figures
 
 
+def _leave_interrupts() -> None:
+    """A figure worker leaves Ctrl-C to the command, which stops after the figures under way
+    (the workers would each print a traceback)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _variant_figures_from_runs(
     key: str, run_dirs: Mapping[str, Path], out_dir: Path, gif: bool
 ) -> dict[str, Path]:
@@ -127,7 +134,7 @@ def reproduction_figures(
         Whether to write the animations of the variants that have them.
     jobs
         Worker processes (≥ 1): the variants' figures are independent, and drawing them took
-        as long as the runs (docs/performance-tests.md). The files are the same either way.
+        as long as the runs (docs/performance.md). The files are the same either way.
 
     Raises
     ------
@@ -145,7 +152,7 @@ def reproduction_figures(
         per_variant = [_variant_figures_from_runs(key, dirs, out_dir, gif)
                        for key, dirs in groups.items()]
     else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        with ProcessPoolExecutor(max_workers=workers, initializer=_leave_interrupts) as pool:
             per_variant = list(pool.map(_variant_figures_from_runs, groups,
                                         groups.values(), repeat(out_dir), repeat(gif)))
     figures: dict[str, Path] = {}
