@@ -111,12 +111,9 @@ def planned_obstacle_clearance_m(
     if not obstacles:
         return math.inf
     x = np.asarray(states, dtype=float)
-    s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
-    ahead = params.body_centre_ahead_of_cog_m
-    ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
-                            params.length_m, params.width_m)
+    ego = _footprints(x, params)
     return min(float(np.min(signed_clearance_m(ego, box)))
-               for box in _obstacle_corners(obstacles, len(s), dt_s))
+               for box in _obstacle_corners(obstacles, len(x), dt_s))
 
 
 def planned_obstacle_shortfall_m(
@@ -153,10 +150,7 @@ def planned_obstacle_shortfall_m(
     boxes = _obstacle_corners(obstacles, len(x), dt_s)
     if not (np.all(np.isfinite(x)) and all(np.all(np.isfinite(box)) for box in boxes)):
         return max(0.0, margin_m - planned_obstacle_clearance_m(x, obstacles, params, dt_s))
-    s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
-    ahead = params.body_centre_ahead_of_cog_m
-    ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
-                            params.length_m, params.width_m)
+    ego = _footprints(x, params)
     ego_lo, ego_hi = ego.min(axis=-2), ego.max(axis=-2)
     reach = margin_m + _ROUNDING_BAND_M
     gap = math.inf
@@ -174,6 +168,15 @@ _ROUNDING_BAND_M = 1e-9
 """Beyond the margin, the bounding-box gap a state must keep to be left out of the exact
 clearance: far above the rounding of the distances (≈ 1e-14 m at road scale), so a state left
 out never has an exact clearance below the margin."""
+
+
+def _footprints(states: np.ndarray, params: VehicleParams) -> np.ndarray:
+    """The plan's predicted footprints in ``(s, d)``, ``(K, 4, 2)``: centred
+    ``params.body_centre_ahead_of_cog_m`` ahead of the reference point along the heading error."""
+    s, d, dpsi = states[:, State.s], states[:, State.d], states[:, State.dpsi]
+    ahead = params.body_centre_ahead_of_cog_m
+    return rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
+                             params.length_m, params.width_m)
 
 
 def _obstacle_corners(
@@ -221,10 +224,7 @@ def planned_obstacle_hit(
     boxes = _obstacle_corners(obstacles, len(x), dt_s)
     if not (np.all(np.isfinite(x)) and all(np.all(np.isfinite(box)) for box in boxes)):
         return planned_obstacle_clearance_m(x, obstacles, params, dt_s) < 0.0
-    s, d, dpsi = x[:, State.s], x[:, State.d], x[:, State.dpsi]
-    ahead = params.body_centre_ahead_of_cog_m
-    ego = rectangle_corners(s + ahead * np.cos(dpsi), d + ahead * np.sin(dpsi), dpsi,
-                            params.length_m, params.width_m)
+    ego = _footprints(x, params)
     ego_lo, ego_hi = ego.min(axis=-2), ego.max(axis=-2)
     for box in boxes:
         overlap = np.minimum(ego_hi, box.max(axis=-2)) - np.maximum(ego_lo, box.min(axis=-2))
