@@ -1,8 +1,8 @@
 """The plug-in example (examples/plugins) runs through the CLI like a built-in configuration.
 
-The CLI imports a plug-in from the current directory, as ``python -m`` does; the commands run
-here from the repository root with only the package's own ``src`` on PYTHONPATH, so the example
-is found the way a user's module next to their campaign file is.
+The CLI imports a plug-in from the current directory, as ``python -m`` does; the commands that
+name a plug-in run here from the repository root with only the package's own ``src`` on
+PYTHONPATH, so the example is found the way a user's module next to their campaign file is.
 """
 
 from __future__ import annotations
@@ -16,8 +16,10 @@ from pathlib import Path
 import pandas as pd
 import pytest
 import tomllib
+from typer.testing import CliRunner
 
 import mufusion
+from mufusion.cli import app
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "plugins"
@@ -85,8 +87,10 @@ def campaign(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp / "campaign"
     done = _mufusion("campaign", str(file), "--out", str(out), "--jobs", "1")
     assert done.returncode == 0, done.stderr
-    report = _mufusion("campaign-report", str(out))
-    assert report.returncode == 0, report.stderr
+    # The report reads results.csv and imports no plug-in, so it runs in this process: the same
+    # command without a second interpreter importing the whole stack (≈ 2.7 s of CPU).
+    report = CliRunner().invoke(app, ["campaign-report", str(out)])
+    assert report.exit_code == 0, report.output
     return out
 
 
