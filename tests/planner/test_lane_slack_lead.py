@@ -5,6 +5,7 @@ higher, so a plan that cannot keep the corridor leaves it later."""
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 import pytest
@@ -52,6 +53,11 @@ def _corridor_problem(cfg: PlannerConfig, speed_mps: float = 20.0, mu: float = 0
     return (*cruise_problem(cfg, speed_mps, mu), d_lo, d_hi)
 
 
+# Each (backend, lead) plan is solved once per module: the two backends' test and their
+# comparison below read the same two plans at lead 10, and the CasADi one builds its own NLP
+# (≈ 1.2 s of CPU) before one IPOPT solve. The solves start from the same problem each time, so
+# a second solve would give the same plan; it is returned read-only, as every caller only reads it.
+@functools.cache
 def _plan(backend_name: str, lead: float) -> np.ndarray:
     cfg = dataclasses.replace(CONFIG, lane_slack_lead=lead)
     if backend_name == "acados":
@@ -68,7 +74,9 @@ def _plan(backend_name: str, lead: float) -> np.ndarray:
         status, guess_x, guess_u = backend.solve(x0, guess_x, guess_u, p, yref, weights,
                                                  d_lo, d_hi, 0.5)
     assert status in (0, 2), status
-    return guess_x[:, State.d]
+    d = guess_x[:, State.d].copy()
+    d.flags.writeable = False
+    return d
 
 
 @pytest.mark.parametrize("backend_name", ["acados", "casadi"])
