@@ -198,10 +198,12 @@ def _lane_estimate_text(verdict: Verdict, run, log: RunLog, by_key) -> str:
             f"{offset:.2f} m from the lane centre."
         )
         return text
+    # Whether it slid is read from the log in the paragraph that follows (the axles'
+    # utilisation, the body slip): here only what kept the corners in.
     return (
         f"L planned with its held estimate μ̂ = {mu_hat:.3f} (true μ = {mu_true:.2f}) like the "
-        f"paper's truck and slid outwards too, but the {vehicle} has {margin:.2f} m of lane on "
-        f"each side and its centre deviated {offset:.2f} m: the slide stayed inside that margin."
+        f"paper's truck, but the {vehicle} kept its lane: it has {margin:.2f} m of lane on each "
+        f"side and its centre deviated up to {offset:.2f} m."
     )
 
 

@@ -89,6 +89,8 @@ class SlideDiagnosis:
         μ̂ under the vehicle at the planning step nearest the curve entry.
     final_speed_mps
         Speed at the end of the run.
+    exit_on_curve
+        Whether the road curved where a corner first left the lane (``None`` if it never did).
     """
 
     configuration: str
@@ -121,6 +123,7 @@ class SlideDiagnosis:
     curve_entry_speed_mps: float | None = None
     curve_limit_speed_mps: float | None = None
     mu_hat_at_curve_entry: float | None = None
+    exit_on_curve: bool | None = None
 
     @property
     def saturated(self) -> bool:
@@ -189,12 +192,16 @@ def slide_diagnosis(log: RunLog) -> SlideDiagnosis:
     util = ts["util_front"].to_numpy(dtype=float)
     util_rear = ts["util_rear"].to_numpy(dtype=float)
     exit_t = _first(t, left)
-    heading, sliding_axle = None, None
+    heading, sliding_axle, on_curve = None, None, None
     with np.errstate(invalid="ignore"):
         saturated = util >= SATURATION
         rear_saturated = util_rear >= SATURATION
     if exit_t is not None:
-        heading = float(ts["dpsi_rad"].to_numpy()[np.flatnonzero(left)[0]])
+        first = np.flatnonzero(left)[0]
+        heading = float(ts["dpsi_rad"].to_numpy()[first])
+        road = log.meta.road
+        on_curve = bool(abs(np.interp(float(ts["s_m"].iloc[first]), road.s_m,
+                                      road.curvature_1pm)) > 1e-6)
         window = ((t >= exit_t - SLIDE_WINDOW_S) & (t <= exit_t)).to_numpy()
         for axle, flags in (("front", saturated), ("rear", rear_saturated)):
             if (flags & window).any():
@@ -235,6 +242,7 @@ def slide_diagnosis(log: RunLog) -> SlideDiagnosis:
         mu_true_start=float(stage["mu_true"].iloc[0]) if len(stage) else float("nan"),
         peak_body_slip_rad=float(np.max(np.abs(ts["body_slip_rad"]))),
         final_speed_mps=float(ts["speed_mps"].iloc[-1]),
+        exit_on_curve=on_curve,
         **_curve_entry(log, stage),
     )
 
@@ -341,8 +349,9 @@ def _lane_text(diag: SlideDiagnosis) -> str:
     text = (
         f"{where}. A corner first left the lane {_at(diag.lane_exit_t_s)} with a heading error "
         f"of {diag.heading_at_exit_rad:.2f} rad and no axle saturated in the "
-        f"{SLIDE_WINDOW_S} s before: the body's yaw against the curving lane, not a slide, "
-        "carried the corner out"
+        f"{SLIDE_WINDOW_S} s before: the body's yaw against the "
+        f"{'curving lane' if diag.exit_on_curve is not False else 'straight lane'}, not a "
+        "slide, carried the corner out"
     )
     if first_slide is not None:
         when = "later" if first_slide > exit_t else "earlier, briefly"
