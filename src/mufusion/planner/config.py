@@ -192,6 +192,12 @@ class PlannerConfig:
     # 0.1 rad, off the reference point's bounds; not while evading (planner/corridor.py). Off:
     # measured, not adopted (docs/decisions/0081).
     heading_rows: bool = False
+    # The corridor takes the body's reach as one geometry (the long sides' extremes of
+    # x sin Δψ − κx²/2; planner/corridor.py, ``body_reach_m``) instead of the ends' swing and a
+    # centred body's bulge apart. Off: measured, not adopted (docs/decisions/0093): it keeps the
+    # truck in a 15 m hairpin where the corridor apart was empty, but its plans then use the
+    # lane's width the over-count kept free, and the truck leaves S-curves by up to 0.6 m.
+    exact_body_reach: bool = False
     # The corridor's slack costs ``lane_slack_lead`` times more at the first stage than at the
     # horizon's end, geometrically in between (planner/penalties.py, ``corridor_slack_scale``),
     # so a plan that cannot keep the corridor leaves it as late as it can. 1 (the default): the

@@ -163,14 +163,14 @@ def iterate(
             d_lo, d_hi = lateral_corridor(
                 guess_x, problem.obstacles, problem.lane_d_min_m - LANE_BACKSTOP_M,
                 problem.lane_d_max_m + LANE_BACKSTOP_M, par, cfg.obstacle_margin_m, kappa,
-                cfg.dt_s, max_swing_rad=0.0)
+                cfg.dt_s, max_swing_rad=0.0, exact_reach=cfg.exact_body_reach)
         else:
             # Without the rows (the default), and while evading, the corridor counts the
             # guess's swing up to MAX_SWING_HEADING_RAD: evading, the heading reaches 0.3-0.5
             # rad and the obstacle margin covers the corners.
             d_lo, d_hi = lateral_corridor(
                 guess_x, problem.obstacles, problem.lane_d_min_m, problem.lane_d_max_m, par,
-                cfg.obstacle_margin_m, kappa, cfg.dt_s)
+                cfg.obstacle_margin_m, kappa, cfg.dt_s, exact_reach=cfg.exact_body_reach)
         yref, weights = tracking_reference(
             cfg, stage.curvature_1pm, stage.mu_hat, mode, float(x0[State.vx]),
             speed_ref, problem.reference_d_m,

@@ -90,6 +90,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         speed_ceiling=cfg.planner.speed_ceiling,
         stability_envelope=cfg.planner.stability_envelope,
         heading_rows=cfg.planner.heading_rows,
+        exact_body_reach=cfg.planner.exact_body_reach,
         lane_slack_lead=cfg.planner.lane_slack_lead,
         reference_regain_limit=cfg.planner.reference_regain_limit,
         steering_rate_limit=cfg.planner.steering_rate_limit,

@@ -183,6 +183,11 @@ class PlannerSettings(_Strict):
     per stage in the OCP; :func:`mufusion.planner.corridor.heading_rows`); off (the default:
     measured, not adopted, docs/decisions/0081), the lane bounds the reference point less the
     guess's heading swing."""
+    exact_body_reach: bool = PlannerConfig.exact_body_reach
+    """The corridor shrinks by the body's long sides' reach at the guess's heading on the
+    stage's curvature, swing and bulge as one geometry
+    (:func:`mufusion.planner.corridor.body_reach_m`); off (the default: measured, not adopted,
+    docs/decisions/0093), the ends' swing and a centred body's bulge counted apart."""
     lane_slack_lead: Annotated[float, Field(ge=1.0, le=1e3)] = PlannerConfig.lane_slack_lead
     """How many times more a plan's leaving its corridor (lane and obstacles) costs at the first
     stage than at the horizon's end, geometrically in between, so that a plan that cannot keep
