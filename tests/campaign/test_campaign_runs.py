@@ -122,10 +122,10 @@ def _wait_for_a_published_run(proc: subprocess.Popen, out: Path) -> None:
     while time.monotonic() < deadline and proc.poll() is None:
         if (out / "runs").is_dir() and any(not p.name.startswith(".") for p in
                                            (out / "runs").iterdir()):
-            # A worker publishes its run's directory before the command hears of it: on a busy
-            # machine a signal sent at once can arrive in between (measured: 0 completed). Give
-            # the command a moment to record it, as a scheduler's signal comes at no set time.
-            time.sleep(2.0)
+            # Signalled at once. The 2 s this wait used to add guarded against a signal landing
+            # between a run directory's rename and the command's record of it (0 completed was
+            # measured once); the command now lists a run it was publishing when it stopped
+            # (test_a_signal_while_a_run_is_published_leaves_it_in_the_partial_summary).
             return
         time.sleep(0.05)
 
@@ -186,3 +186,23 @@ def test_sigterm_to_the_process_group_leaves_a_partial_summary_and_the_resume_co
     assert summary["completed"] + summary["pending"] == 200
     names = sorted(p.name for p in (out / "runs").iterdir())
     assert names == sorted(r["run"] for r in summary["runs"])  # no half-written directory
+
+
+def test_a_signal_while_a_run_is_published_leaves_it_in_the_partial_summary(tmp_path,
+                                                                             monkeypatch):
+    # Ctrl-C between a run directory's rename and the command's record of it: the directory is
+    # complete, so the interrupted campaign lists it (a resume would find it complete anyway).
+    import mufusion.campaign.runs as runs_module
+
+    publish = runs_module.publish_run
+
+    def published_then_interrupted(*args, **kwargs):
+        publish(*args, **kwargs)
+        raise KeyboardInterrupt
+    monkeypatch.setattr(runs_module, "publish_run", published_then_interrupted)
+    with pytest.raises(CampaignInterrupted) as stop:
+        execute_campaign(_specs(3), tmp_path / "runs", jobs=1)
+    names = sorted(p.name for p in (tmp_path / "runs").iterdir())
+    assert len(names) == 1 and [r.spec.name for r in stop.value.finished] == names
+    assert stop.value.finished[0].metrics is not None and not stop.value.finished[0].resumed
+    assert len(stop.value.pending) == 2

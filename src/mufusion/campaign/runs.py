@@ -14,7 +14,7 @@ import signal
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -123,6 +123,9 @@ def execute_campaign(
     runs_dir.mkdir(parents=True, exist_ok=True)
     remove_temporaries(runs_dir)
     results: dict[RunSpec, RunResult] = {}
+    # The run being published: a signal between its directory's rename and its entry in
+    # ``results`` would leave a complete directory the summary does not list.
+    publishing: list[RunSpec] = []
 
     def store(payload: RunPayload) -> None:
         spec = payload.spec
@@ -130,9 +133,11 @@ def execute_campaign(
         if payload.metrics is not None:
             record = {"spec": spec_record(spec), "seed": seeds[spec],
                       "metrics": payload.metrics.to_dict()}
+            publishing.append(spec)
             directory = publish_run(runs_dir / spec.name, payload.files, record)
         results[spec] = RunResult(spec, seeds[spec], _stored(payload.metrics), payload.error,
                                   directory)
+        publishing.clear()
         if on_done:
             on_done(spec)
 
@@ -149,6 +154,10 @@ def execute_campaign(
             dispatch(todo, store, engine=engine, jobs=jobs, address=address)
     except KeyboardInterrupt as stop:
         remove_temporaries(runs_dir)
+        for spec in publishing:
+            found = _completed_run(runs_dir / spec.name, spec, seeds[spec])
+            if spec not in results and found is not None:
+                results[spec] = replace(found, resumed=False)
         finished = with_gt_comparison(results[s] for s in specs if s in results)
         raise CampaignInterrupted(
             finished, [s for s in specs if s not in results],
