@@ -70,6 +70,31 @@ def test_where_only_the_posteriors_upper_edge_passes_the_truck_drives_that_evasi
         driven["t_s"])
 
 
+@pytest.mark.slow
+def test_where_nothing_is_left_to_relax_the_futility_check_still_asks_the_posteriors_upper_edge(
+) -> None:
+    # The truck at 12 m/s on μ 0.15, an obstacle 28 m ahead, 0.4 m left of the lane centre (the
+    # oracle: feasible; GT passes 0.64 m clear). After a 0.1 s braking probe F-safe's μ̂ is 0.1,
+    # all that the local estimate (0.125 ± 0.025) guarantees: nothing to relax. The check then
+    # planned its evasion with μ̂ itself instead of the posterior's upper edge (0.156), found it
+    # hitting and braked in lane: 10.0 m/s into the obstacle.
+    cfg = load_scenario("popup", ["vehicle=truck", "friction.mu=0.15", "initial_speed_mps=12",
+                                  "obstacle.distance_m=28", "obstacle.lateral_offset_m=0.4",
+                                  "duration_s=4.0"])
+    loop = build_loop(cfg, friction="F-safe")
+    log = run_loop(loop, cfg.duration_s)
+    m = compute_metrics(log)
+    assert not m.collision and m.min_clearance_m is not None and m.min_clearance_m > 0.1
+    assert not m.off_road and not m.spun
+    kinds = log.events["kind"]
+    assert not (kinds == EventKind.FUTILE_EVASION).any()
+    driven = log.events[kinds == EventKind.EVASION_AT_UPPER_EDGE]
+    assert len(driven) >= 1 and float(driven["t_s"].min()) == pytest.approx(0.1)
+    recoveries = loop.supervision.lane_recovery.recoveries
+    assert [r.t_s for r in recoveries if r.outcome is RecoveryOutcome.UPPER_EDGE] == list(
+        driven["t_s"])
+
+
 def test_evade_at_upper_edge_must_be_a_bool() -> None:
     with pytest.raises(ValueError, match=r"lane_recovery\.evade_at_upper_edge"):
         LaneRecoverySettings(evade_at_upper_edge="yes")  # type: ignore[arg-type]

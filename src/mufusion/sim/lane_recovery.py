@@ -153,14 +153,17 @@ class LaneRecovery(Supervisor):
         # it may use (the road, evading): "keeps the lane" says nothing about the obstacle.
         futile = (mode == "evade" and self.settings.brake_when_futile and not plan.fallback
                   and planned_obstacle_hit(plan.states, ctx.obstacles, self.params, plan.dt_s))
-        # Without a posterior (GT, L, P) there is nothing to relax: skip the footprint check,
-        # which would run at every planning step. Their μ̂ has no upper edge to check an evasion
-        # against: the check re-plans the evasion with μ̂ itself (one more iteration, so that a
-        # plan still converging is not taken for a futile one).
+        # Without a posterior (GT, L, P), or with μ̂ already at what the estimates guarantee,
+        # there is nothing to relax: skip the footprint check, which would run at every planning
+        # step. An evasion is still checked at the posterior's upper edge where there is one
+        # (docs/decisions/0094); without one at μ̂ itself (one more iteration, so that a plan
+        # still converging is not taken for a futile one).
         if self._relaxed(estimate, 1.0) is None:
             self.alpha = 0.0
             if futile:
-                decided = self._when_every_evasion_hits(ctx, estimate, estimate, held=0.0)
+                edge = plausible_estimate(estimate)
+                decided = self._when_every_evasion_hits(
+                    ctx, estimate, estimate if edge is None else edge, held=0.0)
                 if decided is not None:
                     return decided
             return plan, estimate

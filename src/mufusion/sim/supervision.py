@@ -77,9 +77,10 @@ planner's emergency mode) to lower the impact speed, logged as ``futile_evasion`
 that evasion is driven (``evade_at_upper_edge``, logged as ``evasion_at_upper_edge``): every plan
 with less friction is predicted to hit, and keeping one of them drove into the obstacle
 (docs/decisions/0086). The check is made afresh at each planning step. An evasion inside the
-band it may use (the road) that is predicted to hit is reviewed the same way; without a
-posterior (GT, L, P) the check re-plans the evasion with μ̂ itself and only its braking applies
-(docs/decisions/0062).
+band it may use (the road) that is predicted to hit is reviewed the same way, and so is one
+planned where μ̂ is already all the estimates guarantee (nothing to relax; the check still asks
+the posterior's upper edge, docs/decisions/0094); without a posterior (GT, L, P) the check
+re-plans the evasion with μ̂ itself and only its braking applies (docs/decisions/0062).
 
 The loop runs them as its supervisors (:class:`~mufusion.sim.supervisor.Supervisor`):
 :class:`~mufusion.sim.stop_in_lane.StopInLane`, :class:`~mufusion.sim.lane_recovery.LaneRecovery`
