@@ -3,7 +3,7 @@ from __future__ import annotations
 import numpy as np
 
 from mufusion.planner.ocp import PlannerObstacle
-from mufusion.sim.obstacle_response import ObstacleResponse, obstacle_mode
+from mufusion.sim.obstacle_response import ObstacleResponse, obstacle_mode, stop_within_reach
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.planner_model import N_STATES, State
 
@@ -50,6 +50,25 @@ def test_obstacles_beside_the_path_or_blocking_the_road() -> None:
     assert mode(24.0, 20.0, 0.75, offset=3.0) == "evade"
     # Straddling so that neither side has room: stop, whatever the speed.
     assert mode(24.0, 20.0, 0.75, offset=1.6) == "emergency"
+
+
+def test_a_stop_on_a_blocked_road_says_whether_the_estimate_reaches_it() -> None:
+    front = 0.5 * TRUCK.length_m + 0.5 * (TRUCK.cog_to_front_axle_m - TRUCK.cog_to_rear_axle_m)
+
+    def reach(speed, ahead_m, mu, offset=1.6, moving=0.0):
+        ob = PlannerObstacle(s_m=60.0 + front + ahead_m, d_m=offset, length_m=1.0,
+                             width_m=1.0, speed_mps=moving)
+        return stop_within_reach([ob], state(speed), GRID, np.full(GRID.shape, mu), TRUCK,
+                                 ObstacleResponse(brake_first=True))
+
+    # The rule stops for a blocked road at any speed; the estimate reaches that stop only
+    # where it would grant it anyway (14 m/s needs 18.8 m at μ̂ 0.75, 24 m/s 51 m).
+    assert mode(24.0, 35.0, 0.75, offset=1.6) == mode(14.0, 35.0, 0.75, offset=1.6) == "emergency"
+    assert reach(14.0, 35.0, 0.75) and not reach(24.0, 35.0, 0.75)
+    assert not reach(14.0, 35.0, 0.2)
+    # Beside the path there is nothing to stop for; traffic is not judged here.
+    assert reach(24.0, 35.0, 0.2, offset=3.0)
+    assert reach(24.0, 35.0, 0.2, moving=-10.0)
 
 
 class _FailingPlanner:

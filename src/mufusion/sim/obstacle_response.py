@@ -142,6 +142,31 @@ def obstacle_mode(
     return "evade"
 
 
+def stop_within_reach(
+    obstacles: Sequence[PlannerObstacle],
+    xf: np.ndarray,
+    estimate_s_m: np.ndarray,
+    mu_hat: np.ndarray,
+    params: VehicleParams,
+    response: ObstacleResponse,
+    braking: bool = False,
+) -> bool:
+    """Whether braking at what ``mu_hat`` grants stops short of every static obstacle in the
+    vehicle's path (:func:`stopping_possible`, as :func:`obstacle_mode` judges a stop).
+
+    :func:`obstacle_mode` also chooses the stop where no side of an obstacle has room, whatever
+    ``mu_hat`` grants: this says whether that stop is within the estimate's reach. Moving
+    obstacles are not judged here (true without a static one in the path).
+    """
+    s_ego, d_ego, speed = float(xf[State.s]), float(xf[State.d]), float(xf[State.vx])
+    return all(
+        _can_stop(speed, ob, s_ego, estimate_s_m, mu_hat, params, response, braking)
+        for ob in obstacles
+        if ob.speed_mps == 0.0 and in_path(ob.s_m, ob.d_m, _clearance_m(ob, params, response),
+                                           s_ego, d_ego)
+    )
+
+
 def _clearance_m(ob: PlannerObstacle, params: VehicleParams, response: ObstacleResponse) -> float:
     """Lateral distance the reference point must keep from the obstacle's centre line [m]."""
     return 0.5 * (ob.width_m + params.width_m) + response.margin_m

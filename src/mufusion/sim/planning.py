@@ -17,6 +17,7 @@ from mufusion.sim.obstacle_response import (
     ObstacleResponse,
     follow_speed_mps,
     obstacle_mode,
+    stop_within_reach,
     traffic_role,
 )
 from mufusion.sim.supervisor import PlanningContext
@@ -135,6 +136,9 @@ class Planning:
             t_s, xf, obstacles, minimal_risk, self.last_mode,
             lambda estimate, mode: self.plan(xf, t_s, s_ego, estimate, obstacles, mode),
             lambda estimate: self.mode(obstacles, xf, estimate),
+            lambda estimate: stop_within_reach(
+                obstacles, xf, self.grid_m, estimate.mu_hat, self.params,
+                self.obstacle_response, braking=self.last_mode == "emergency"),
         )
 
     def mode(

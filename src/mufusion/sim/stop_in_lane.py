@@ -59,6 +59,8 @@ class StopInLane(Supervisor):
         """The relaxation of the stop in lane, while held."""
         self.probes: list[StopProbe] = []
         """The braking probes that ended."""
+        self.blocked_alpha: float | None = None
+        """The relaxation of a stop the rule chose with μ̂ granting none (a blocked road)."""
 
     def choose_mode(
         self, ctx: PlanningContext, mode: PlanningMode, estimate: FrictionEstimate
@@ -68,7 +70,35 @@ class StopInLane(Supervisor):
         if mode == "evade" and self.settings.enabled and not ctx.minimal_risk:
             return self._stop_in_lane(ctx, estimate)
         self.end_probe(ctx.t_s, StopProbeEnd.RULE, f"the stop-or-evade rule chose {mode}")
+        if (mode == "emergency" and self.settings.enabled and not ctx.minimal_risk
+                and estimate.fused is not None and not ctx.stop_granted(estimate)):
+            return mode, self._blocked_stop(ctx, estimate)
+        self.blocked_alpha = None
         return mode, estimate
+
+    def _blocked_stop(self, ctx: PlanningContext, estimate: FrictionEstimate) -> FrictionEstimate:
+        """The estimate to stop with where the rule stops although μ̂ grants no stop (no side of
+        the obstacle has room): μ̂ relaxed towards the posterior mean, the smallest of ``steps``
+        that grants it, else the whole way. Braking at μ̂ the vehicle hits for certain; braking
+        harder, in lane, can only lower the impact speed, and on a road the camera's class
+        under-states it excites the slip estimator, which μ̂'s own braking may not
+        (docs/decisions/0095)."""
+        chosen, alpha = estimate, 0.0
+        for step in self.settings.steps:
+            relaxed = relaxed_estimate(estimate, step)
+            if relaxed is None:
+                return estimate  # the mean adds nothing to μ̂: no step will
+            chosen, alpha = relaxed, step
+            if ctx.stop_granted(relaxed):
+                break
+        if alpha != self.blocked_alpha:
+            self._event(
+                ctx.t_s, EventKind.LANE_RECOVERY,
+                f"the road is blocked and μ̂ grants no stop: braking with μ̂ relaxed {alpha:.2f} "
+                "of the way to the posterior mean" + (
+                    "" if ctx.stop_granted(chosen) else ", which grants none either"))
+        self.blocked_alpha = alpha
+        return chosen
 
     def _stop_in_lane(
         self, ctx: PlanningContext, estimate: FrictionEstimate

@@ -30,7 +30,10 @@ class PlanningContext:
 
     ``plan(estimate, mode)`` makes one planner step from this state against these obstacles (the
     planner's warm start moves on with each call); ``mode_of(estimate)`` is the stop-or-evade
-    rule (:func:`~mufusion.sim.obstacle_response.obstacle_mode`) with that estimate.
+    rule (:func:`~mufusion.sim.obstacle_response.obstacle_mode`) with that estimate;
+    ``stop_granted(estimate)`` whether that estimate grants the stop in front of every static
+    obstacle in the path (:func:`~mufusion.sim.obstacle_response.stop_within_reach`: the rule
+    also stops where the road is blocked, granted or not).
     """
 
     t_s: float
@@ -43,6 +46,7 @@ class PlanningContext:
     """The mode chosen at the previous planning step."""
     plan: Callable[[FrictionEstimate, PlanningMode], Plan]
     mode_of: Callable[[FrictionEstimate], PlanningMode]
+    stop_granted: Callable[[FrictionEstimate], bool] = lambda estimate: True
 
     @property
     def s_m(self) -> float:
