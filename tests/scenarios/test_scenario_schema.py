@@ -50,6 +50,25 @@ def test_turn_angle_shapes_the_road() -> None:
         assert float(road.path.end_heading_rad) == pytest.approx(-angle, abs=1e-9)
 
 
+def test_a_later_popup_appears_its_distance_ahead_of_the_vehicle_front() -> None:
+    # distance_m is the gap when it appears; a later appearance moves the obstacle down the
+    # road by the initial speed's cruise and triggers it on the vehicle's progress, so that
+    # the gap holds whatever the vehicle did meanwhile (it was fixed from the start before:
+    # 1.5 s at 22 m/s put a 32 m pop-up 1 m ahead of the front).
+    at_once, later = (load_scenario("popup", ["initial_speed_mps=22", "obstacle.distance_m=32",
+                                              f"obstacle.appear_at_s={t}"]) for t in (0.0, 1.5))
+    params = vehicle_preset(at_once.vehicle)
+    (first,), (second,) = (c.build_road(params).obstacles for c in (at_once, later))
+    assert first.appear_at_time_s == 0.0 and first.appear_at_ego_s_m is None
+    assert second.s_m - first.s_m == pytest.approx(22.0 * 1.5)
+    assert second.appear_at_time_s is None
+    # It appears when the front (CoG + cog_to_body_front_m) is distance_m before its centre.
+    gap = second.s_m - (second.appear_at_ego_s_m + params.cog_to_body_front_m)
+    assert gap == pytest.approx(32.0)
+    with pytest.raises(ValueError, match=r"obstacle\.appear_at_s must leave the obstacle"):
+        load_scenario("popup", ["initial_speed_mps=22", "obstacle.appear_at_s=20"])
+
+
 def test_clothoids_longer_than_the_turn_are_rejected() -> None:
     with pytest.raises(ValueError, match="clothoid_m must be <= radius_m"):
         load_scenario("turn", ["turn.angle_rad=0.1", "turn.clothoid_m=5"])

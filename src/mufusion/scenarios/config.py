@@ -13,7 +13,7 @@ from __future__ import annotations
 from typing import Annotated, Literal, TypeVar
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from mufusion.road import FrictionMap, Obstacle, Road, straight_road, turn_road
 from mufusion.scenarios.base import Scenario
@@ -84,16 +84,32 @@ class PopupScenario(_PaperScenario):
     """Switch the planner to its emergency (stop) mode when an obstacle appears."""
     comparison_time_s: NonNegFloat = 0.5
 
+    @model_validator(mode="after")
+    def _obstacle_on_the_road(self) -> PopupScenario:
+        # Where a cruise at the initial speed puts it, the obstacle must still lie on the road.
+        ahead_m = self.initial_speed_mps * self.obstacle.appear_at_s + self.obstacle.distance_m
+        if ahead_m >= self.road.length_m:
+            raise ValueError(
+                "obstacle.appear_at_s must leave the obstacle on the road: initial_speed_mps × "
+                f"appear_at_s + distance_m = {ahead_m:.1f} m, road.length_m = "
+                f"{self.road.length_m:.1f} m")
+        return self
+
     def build_road(self, params: VehicleParams) -> Road:
-        """A straight two-lane road, the obstacle ``distance_m`` ahead of the vehicle's front."""
+        """A straight two-lane road, the obstacle ``distance_m`` ahead of the vehicle's front
+        when it appears: at once, or (``appear_at_s`` > 0) once the vehicle's front is
+        ``distance_m`` before it, that much further down the road as a cruise at the initial
+        speed covers in ``appear_at_s``."""
         s0, ob = self.start_s_m, self.obstacle
         front_m = params.cog_to_body_front_m
+        cruise_m = self.initial_speed_mps * ob.appear_at_s
         obstacle = Obstacle(
-            s_m=s0 + front_m + ob.distance_m,
+            s_m=s0 + front_m + ob.distance_m + cruise_m,
             d_m=ob.lateral_offset_m,
             length_m=ob.length_m,
             width_m=ob.width_m,
-            appear_at_time_s=ob.appear_at_s,
+            appear_at_ego_s_m=s0 + cruise_m if ob.appear_at_s > 0.0 else None,
+            appear_at_time_s=0.0 if ob.appear_at_s == 0.0 else None,
         )
         return straight_road(
             s0 + self.road.length_m,

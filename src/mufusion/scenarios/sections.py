@@ -101,7 +101,10 @@ class ObstacleConfig(_Strict):
     length_m: PositiveFloat = 1.0
     width_m: PositiveFloat = 1.0
     appear_at_s: NonNegFloat = 0.0
-    """Time at which it appears [s]."""
+    """How long the vehicle drives before it appears [s]: it pops up when the vehicle's front
+    is ``distance_m`` before it, placed ``initial_speed_mps × appear_at_s`` further down the road
+    than at 0 (where a vehicle cruising at its initial speed is then). ``distance_m`` holds
+    whatever the vehicle did meanwhile; only the time is that of a cruise (0: from the start)."""
 
 
 class EstimationConfig(_Strict):
