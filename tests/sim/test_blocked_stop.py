@@ -38,3 +38,22 @@ def test_a_blocked_road_is_stopped_for_with_the_friction_the_estimates_support()
     blocked = relaxed.events[relaxed.events["kind"] == EventKind.LANE_RECOVERY]
     assert len(blocked) >= 1 and float(blocked["t_s"].iloc[0]) == 0.0
     assert blocked["detail"].str.startswith("the road is blocked").all()
+
+
+@pytest.mark.slow
+def test_where_nothing_the_estimates_vouch_for_stops_in_time_it_brakes_at_the_upper_edge(
+) -> None:
+    # The truck at 12 m/s on μ 0.3 in a 3.0 m lane, a 1 m obstacle 32 m ahead, 0.9 m left: the
+    # road is blocked (oracle: marginal; GT stops 1.4 m short at λ μ). F-safe's local estimate
+    # reports 0.275, so all it vouches for is 0.25 (μ_l − m_l): relaxed that far it still hit,
+    # at 4.2 m/s. The posterior's upper edge is above the truth; the slip control holds the
+    # wheels at the road's limit, and the truck stops short.
+    cfg = load_scenario("popup", ["vehicle=truck", "road.lane_width_m=3.0", "friction.mu=0.3",
+                                  "initial_speed_mps=12", "obstacle.distance_m=32",
+                                  "obstacle.lateral_offset_m=0.9"])
+    log = run_loop(build_loop(cfg, friction="F-safe"), cfg.duration_s)
+    m = compute_metrics(log)
+    assert not m.collision and m.final_speed_mps < 0.5
+    assert (log.planning_steps["mode"] == "emergency").all()
+    details = log.events.loc[log.events["kind"] == EventKind.LANE_RECOVERY, "detail"]
+    assert details.str.contains("upper 95 % edge").any()

@@ -15,6 +15,9 @@ from mufusion.sim.settings import LaneRecoverySettings
 from mufusion.sim.supervision import plausible_estimate, relaxed_estimate
 from mufusion.sim.supervisor import PlanningContext, Supervisor
 
+UPPER_EDGE = float("inf")
+"""``StopInLane.blocked_alpha`` while a blocked road's stop brakes at the posterior's upper edge."""
+
 
 class StopProbeEnd(StrEnum):
     """Why a braking probe ended."""
@@ -83,22 +86,30 @@ class StopInLane(Supervisor):
         harder, in lane, can only lower the impact speed, and on a road the camera's class
         under-states it excites the slip estimator, which μ̂'s own braking may not
         (docs/decisions/0095)."""
-        chosen, alpha = estimate, 0.0
-        for step in self.settings.steps:
-            relaxed = relaxed_estimate(estimate, step)
+        for alpha in self.settings.steps:
+            relaxed = relaxed_estimate(estimate, alpha)
             if relaxed is None:
-                return estimate  # the mean adds nothing to μ̂: no step will
-            chosen, alpha = relaxed, step
+                break  # the mean adds nothing to μ̂: no step will
             if ctx.stop_granted(relaxed):
-                break
-        if alpha != self.blocked_alpha:
-            self._event(
-                ctx.t_s, EventKind.LANE_RECOVERY,
-                f"the road is blocked and μ̂ grants no stop: braking with μ̂ relaxed {alpha:.2f} "
-                "of the way to the posterior mean" + (
-                    "" if ctx.stop_granted(chosen) else ", which grants none either"))
-        self.blocked_alpha = alpha
-        return chosen
+                if alpha != self.blocked_alpha:
+                    self._event(ctx.t_s, EventKind.LANE_RECOVERY,
+                                f"the road is blocked and μ̂ grants no stop: braking with μ̂ "
+                                f"relaxed {alpha:.2f} of the way to the posterior mean")
+                self.blocked_alpha = alpha
+                return relaxed
+        # Nothing the estimates vouch for stops in time: brake with the most friction the
+        # posterior allows, its upper 95 % edge, as brake assist brakes at the tires' limit (the
+        # vehicle's slip control holds the wheels there, and in lane on a straight a plan above
+        # the road's friction loses nothing but the speed it could not have shed anyway).
+        edge = plausible_estimate(estimate)
+        if edge is None:
+            return estimate
+        if self.blocked_alpha != UPPER_EDGE:
+            self._event(ctx.t_s, EventKind.LANE_RECOVERY,
+                        "the road is blocked and no μ̂ the estimates vouch for grants the stop: "
+                        "braking with μ̂ at the posterior's upper 95 % edge")
+        self.blocked_alpha = UPPER_EDGE
+        return edge
 
     def _stop_in_lane(
         self, ctx: PlanningContext, estimate: FrictionEstimate

@@ -67,9 +67,10 @@ docs/decisions/0027, "F-safe's lane in the pop-up").
 The rule also stops where no side of the obstacle has room, whether μ̂ grants the stop or not.
 Where it does not (:func:`~mufusion.sim.obstacle_response.stop_within_reach`), braking with μ̂
 hits for certain: the stop brakes with μ̂ relaxed as in step 1, the smallest ``α`` that grants
-it, else the whole way (docs/decisions/0095). In lane, braking harder can only lower the impact
-speed, and on a road the camera's class under-states, braking at its minimum may load the tires
-too little for the local estimator ever to measure.
+it, and where none does with μ̂ at the posterior's upper 95 % edge, braking at the tires' limit
+under slip control as brake assist does (docs/decisions/0095). In lane, braking harder can only
+lower the impact speed, and on a road the camera's class under-states, braking at its minimum
+may load the tires too little for the local estimator ever to measure.
 
 **Braking when the evasion is futile** (``brake_when_futile``). Evading, lane recovery ranks a
 candidate predicted to hit an obstacle (:func:`planned_obstacle_clearance_m`) after every one
