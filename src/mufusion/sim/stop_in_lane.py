@@ -5,6 +5,7 @@ What it does and why: :mod:`mufusion.sim.supervision` ("Stopping in lane for an 
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -17,6 +18,20 @@ from mufusion.sim.supervisor import PlanningContext, Supervisor
 
 UPPER_EDGE = float("inf")
 """``StopInLane.blocked_alpha`` while a blocked road's stop brakes at the posterior's upper edge."""
+
+
+def smallest_relaxation(
+    estimate: FrictionEstimate, steps: Sequence[float], fits: Callable[[FrictionEstimate], bool]
+) -> tuple[float, FrictionEstimate] | None:
+    """The smallest of ``steps`` whose :func:`relaxed_estimate` ``fits``, with that estimate;
+    None if none does or nothing relaxes (no posterior, or its mean adds nothing to μ̂)."""
+    for alpha in steps:
+        relaxed = relaxed_estimate(estimate, alpha)
+        if relaxed is None:
+            return None  # the mean adds nothing to μ̂: no step will
+        if fits(relaxed):
+            return alpha, relaxed
+    return None
 
 
 class StopProbeEnd(StrEnum):
@@ -69,7 +84,8 @@ class StopInLane(Supervisor):
         self, ctx: PlanningContext, mode: PlanningMode, estimate: FrictionEstimate
     ) -> tuple[PlanningMode, FrictionEstimate]:
         """``("emergency", relaxed)``, ``("emergency", estimate)`` while probing, else the rule's
-        choice (ending a running probe if the rule no longer evades)."""
+        choice (ending a running probe if the rule no longer evades); a stop the rule chose
+        where μ̂ grants none (a blocked road) with the estimate of :meth:`_blocked_stop`."""
         if mode == "evade" and self.settings.enabled and not ctx.minimal_risk:
             return self._stop_in_lane(ctx, estimate)
         self.end_probe(ctx.t_s, StopProbeEnd.RULE, f"the stop-or-evade rule chose {mode}")
@@ -82,21 +98,19 @@ class StopInLane(Supervisor):
     def _blocked_stop(self, ctx: PlanningContext, estimate: FrictionEstimate) -> FrictionEstimate:
         """The estimate to stop with where the rule stops although μ̂ grants no stop (no side of
         the obstacle has room): μ̂ relaxed towards the posterior mean, the smallest of ``steps``
-        that grants it, else the whole way. Braking at μ̂ the vehicle hits for certain; braking
-        harder, in lane, can only lower the impact speed, and on a road the camera's class
-        under-states it excites the slip estimator, which μ̂'s own braking may not
+        that grants it, else μ̂ at the posterior's upper 95 % edge. Braking at μ̂ the vehicle hits
+        for certain; braking harder, in lane, can only lower the impact speed, and on a road the
+        camera's class under-states it excites the slip estimator, which μ̂'s own braking may not
         (docs/decisions/0095)."""
-        for alpha in self.settings.steps:
-            relaxed = relaxed_estimate(estimate, alpha)
-            if relaxed is None:
-                break  # the mean adds nothing to μ̂: no step will
-            if ctx.stop_granted(relaxed):
-                if alpha != self.blocked_alpha:
-                    self._event(ctx.t_s, EventKind.LANE_RECOVERY,
-                                f"the road is blocked and μ̂ grants no stop: braking with μ̂ "
-                                f"relaxed {alpha:.2f} of the way to the posterior mean")
-                self.blocked_alpha = alpha
-                return relaxed
+        found = smallest_relaxation(estimate, self.settings.steps, ctx.stop_granted)
+        if found is not None:
+            alpha, relaxed = found
+            if alpha != self.blocked_alpha:
+                self._event(ctx.t_s, EventKind.LANE_RECOVERY,
+                            f"the road is blocked and μ̂ grants no stop: braking with μ̂ "
+                            f"relaxed {alpha:.2f} of the way to the posterior mean")
+            self.blocked_alpha = alpha
+            return relaxed
         # Nothing the estimates vouch for stops in time: brake with the most friction the
         # posterior allows, its upper 95 % edge, as brake assist brakes at the tires' limit (the
         # vehicle's slip control holds the wheels there, and in lane on a straight a plan above
@@ -118,20 +132,19 @@ class StopInLane(Supervisor):
         # Once the evasion is under way it is kept (and without a posterior nothing relaxes).
         if ctx.last_mode == "evade" or estimate.fused is None:
             return "evade", estimate
-        for alpha in self.settings.steps:
-            relaxed = relaxed_estimate(estimate, alpha)
-            if relaxed is None:
-                break  # the mean adds nothing to μ̂: no α will
-            if ctx.mode_of(relaxed) == "emergency":
-                self.end_probe(t, StopProbeEnd.STOP_FITS, f"the stop fits with μ̂ relaxed "
-                               f"{alpha:.2f} of the way to the posterior mean")
-                if alpha != self.alpha:
-                    self._event(
-                        t, EventKind.LANE_RECOVERY, f"stop in lane, μ̂ relaxed {alpha:.2f} of the "
-                        "way to the posterior mean (μ̂ grants no stop: evading would leave the "
-                        "lane)")
-                self.alpha = alpha
-                return "emergency", relaxed
+        found = smallest_relaxation(estimate, self.settings.steps,
+                                    lambda relaxed: ctx.mode_of(relaxed) == "emergency")
+        if found is not None:
+            alpha, relaxed = found
+            self.end_probe(t, StopProbeEnd.STOP_FITS, f"the stop fits with μ̂ relaxed "
+                           f"{alpha:.2f} of the way to the posterior mean")
+            if alpha != self.alpha:
+                self._event(
+                    t, EventKind.LANE_RECOVERY, f"stop in lane, μ̂ relaxed {alpha:.2f} of the "
+                    "way to the posterior mean (μ̂ grants no stop: evading would leave the "
+                    "lane)")
+            self.alpha = alpha
+            return "emergency", relaxed
         self.alpha = None
         since = self.probe_since_s
         probing = since is not None
