@@ -40,13 +40,14 @@ def _inside(force_x, force_y, radius, n_sides, tol=1e-3):
 
 @pytest.fixture(scope="session")
 def free_force_planner() -> TractionAdaptivePlanner:
-    """The paper's planner: the forces free inputs (no steering-rate limit, no torque lag) and
-    the polygons at the static axle loads (the authors' settings' solver, which ``reproduce``
-    uses)."""
+    """The paper's planner: the forces free inputs (no steering-rate limit, no torque lag), the
+    polygons at the static axle loads and the cruise speed tracked, without the curve speed
+    reference and the body's fit it carries (the paper's method, which ``reproduce`` uses)."""
     return TractionAdaptivePlanner(TRUCK, PlannerConfig(lane_d_min_m=-0.45, lane_d_max_m=0.45,
                                                         steering_rate_limit=False,
                                                         load_transfer=False,
-                                                        torque_lag=False))
+                                                        torque_lag=False,
+                                                        curve_speed_reference=False))
 
 
 # Starting inside the curve with no yaw rate needs the front force at once: the free-force

@@ -61,6 +61,27 @@ def test_the_cars_stiff_tire_never_turns_its_body_out_of_the_lane() -> None:
                for mu in (0.2, 0.6, 1.0) for r in (15.0, 40.0, 150.0))
 
 
+def test_a_body_that_does_not_fit_straight_may_fit_nose_out_of_a_tight_bend() -> None:
+    """The truck in a 3.0 m lane on a 15 m radius: aligned with the lane at its centre of
+    gravity its rear end sticks out (3.04 m), turned slightly nose out of the bend it fits, so
+    the cap is the slip at which it spans the lane again, not 1 (docs/decisions/0097)."""
+    lane, kappa = 3.0, 1 / 15
+    geometry = (TRUCK.width_m, TRUCK.cog_to_body_front_m, TRUCK.cog_to_body_rear_m)
+    assert footprint_span_m(0.0, kappa, *geometry) > lane
+    assert footprint_span_m(-0.05, kappa, *geometry) < lane
+    body = BodyInLane.of(TRUCK, lane)
+    cap = body.lateral_cap(0.8, kappa)
+    assert 0.5 < cap < 1.0
+    lo, hi = 0.0, 0.4  # the slip at which the tire delivers `cap`, by bisection
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        used = tire_forces_scalar(0.0, mid, 1.0, 0.8, TRUCK.tire)[2]
+        lo, hi = (mid, hi) if used < cap else (lo, mid)
+    heading = lo - TRUCK.cog_to_rear_axle_m * kappa
+    assert -0.05 < heading < 0.0
+    assert footprint_span_m(heading, kappa, *geometry) == pytest.approx(lane, abs=1e-3)
+
+
 def test_a_surface_dependent_tire_is_judged_at_the_surfaces_own_stiffness() -> None:
     """The authors' tire set is stiffer on dry asphalt than the truck's own: less slip, a
     higher cap."""

@@ -178,17 +178,17 @@ def test_the_exact_body_reach_keeps_the_truck_in_a_15_m_hairpin_whose_friction_d
     # Truck, 12 m/s, μ 0.9 → 0.2 where the 15 m arc begins (after a 20 m clothoid), a hairpin:
     # feasible with a wide margin (braking to the arc's 5 m/s on μ 0.9 takes a fraction of the
     # 50 m). A held-out draw (examples/limits_turn_heldout6.toml) found GT 0.41 m out here with
-    # the default corridor (the left turn kept its lane): at its turning attitude (nose 0.1 rad
-    # out of the bend) the ends' swing and a centred body's bulge, counted apart, left no room
+    # the corridor of the ends' swing and a centred body's bulge counted apart (the left turn
+    # kept its lane): at its turning attitude (nose 0.1 rad out of the bend) they left no room
     # between its bounds, the plans braked at their polygons against the lane slack on μ 0.2
-    # and the front tires saturated. Counted as one geometry the body fits
-    # (planner.exact_body_reach; measured, not the default: decision 0093; the geometry for
-    # both signs of κ: tests/planner/test_body_reach.py).
+    # and the front tires saturated. Counted as one geometry the body fits (decision 0093; the
+    # product's corridor with the body's fit, decision 0097; the geometry for both signs of κ:
+    # tests/planner/test_body_reach.py).
     cfg = load_scenario("turn", overrides=[
         "vehicle=truck", "initial_speed_mps=12", "duration_s=16", "turn.radius_m=15",
         "turn.angle_rad=3.14", "turn.start_ahead_m=30", "turn.clothoid_m=20",
         "friction.mu_before=0.9", "friction.mu_turn=0.2", "friction.change_ahead_m=50",
-        "turn.direction=right", "planner.exact_body_reach=true",
+        "turn.direction=right",
     ])
     m = compute_metrics(run_scenario(cfg, "GT"))
     assert m.feasibility == "feasible"

@@ -194,8 +194,9 @@ class PlannerConfig:
     heading_rows: bool = False
     # The corridor takes the body's reach as one geometry (the long sides' extremes of
     # x sin Δψ − κx²/2; planner/corridor.py, ``body_reach_m``) instead of the ends' swing and a
-    # centred body's bulge apart. Off: measured, not adopted (docs/decisions/0093): it keeps the
-    # truck in a 15 m hairpin where the corridor apart was empty, but its plans then use the
+    # centred body's bulge apart, even without ``body_fit`` (which implies it: see
+    # ``corridor_exact_reach``). Alone, measured and not adopted (docs/decisions/0093): it keeps
+    # the truck in a 15 m hairpin where the corridor apart was empty, but its plans then use the
     # lane's width the over-count kept free, and the truck leaves S-curves by up to 0.6 m.
     exact_body_reach: bool = False
     # The corridor's slack costs ``lane_slack_lead`` times more at the first stage than at the
@@ -205,6 +206,19 @@ class PlannerConfig:
     # look impossible, but GT, deferring excursions that were real, left its lane more and in
     # more variants: measured, not adopted (docs/decisions/0089).
     lane_slack_lead: float = 1.0
+    # The speed reference's curve speeds capped where the plans' steady attitude (their rear
+    # tire's slip angle) leaves the corridor no width, and the corridor counting the body's reach
+    # as one geometry (planner/body_fit.py, docs/decisions/0097); off: the point mass's curve
+    # speeds, whatever the lane's width. Acts with ``curve_speed_reference`` only.
+    body_fit: bool = True
+
+    @property
+    def corridor_exact_reach(self) -> bool:
+        """Whether the corridor counts the body's reach as one geometry: asked for
+        (``exact_body_reach``), or where the speed reference corners within the body's fit
+        (``body_fit`` with ``curve_speed_reference``), which keeps the plans' attitude inside the
+        room the exact count gives back (docs/decisions/0097)."""
+        return self.exact_body_reach or (self.body_fit and self.curve_speed_reference)
 
     def __post_init__(self) -> None:
         if self.stiffness not in STIFFNESS_MODELS:

@@ -130,6 +130,27 @@ def body_reach_m(sin_dpsi: np.ndarray, kappa_1pm: np.ndarray, a_front_m: float,
     return np.minimum(lowest, 0.0), np.maximum(highest, 0.0)
 
 
+def reach_taken_m(sin_dpsi: np.ndarray, kappa_1pm: np.ndarray, params: VehicleParams,
+                  exact_reach: bool = False) -> np.ndarray:
+    """How much of the reference point's band [m] :func:`lateral_corridor` takes off for the
+    body at heading error Δψ (``sin_dpsi``) on curvature κ, both sides together: the centred
+    body's bulge and the ends' swing counted apart, or (``exact_reach``) the long sides' reach
+    as one geometry (:func:`body_reach_m`). The corridor is empty where this exceeds the band.
+
+    >>> from mufusion.vehicle.params import TRUCK
+    >>> [round(float(v), 3) for v in reach_taken_m(np.array([0.0, 0.02]), np.full(2, 1 / 60),
+    ...                                             TRUCK)]
+    [0.082, 0.208]
+    """
+    kappa = np.asarray(kappa_1pm, dtype=float)
+    if exact_reach:
+        lowest, highest = body_reach_m(np.asarray(sin_dpsi, dtype=float), kappa,
+                                       params.cog_to_body_front_m, params.cog_to_body_rear_m)
+        return highest - lowest
+    bulge = 0.5 * np.abs(kappa) * (0.5 * params.length_m) ** 2
+    return bulge + (params.cog_to_body_front_m + params.cog_to_body_rear_m) * np.abs(sin_dpsi)
+
+
 def heading_rows(d: Any, dpsi: Any, kappa: Any, lane_lo: Any, lane_hi: Any,
                  params: VehicleParams) -> list[Any]:
     """The body's front and rear ends within the lane at the plan's own heading error (CasADi).

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mufusion.planner.backend import PlannerBackend
+from mufusion.planner.body_fit import body_fit_cap, body_fitted_curvature
 from mufusion.planner.config import PlannerConfig, PlannerMode, PlannerObstacle
 from mufusion.planner.ocp import (
     axle_loads_n,
@@ -132,6 +133,15 @@ def iterate(
             kappa_ref = sharpest_under_axles(curvature_of_s, par.cog_to_rear_axle_m, ahead_m)
             accel_fraction = (cfg.reference_curve_fraction * cfg.utilization_factor
                               * np.cos(np.pi / cfg.polygon_sides))
+            if cfg.body_fit:
+                # No faster than the body, turned by its rear tire's slip, fits the band its
+                # lane bounds leave it (docs/decisions/0097).
+                kappa_ref = body_fitted_curvature(
+                    kappa_ref, mu_ref,
+                    body_fit_cap(par, cfg.lane_d_max_m - cfg.lane_d_min_m,
+                                 cfg.utilization_factor, cfg.corridor_exact_reach,
+                                 cfg.stiffness_table),
+                    accel_fraction)
             speed_ref = curve_speed_reference_mps(
                 guess_x[:, State.s], kappa_ref, mu_ref, reference_speed_mps, accel_fraction,
                 cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
@@ -163,14 +173,14 @@ def iterate(
             d_lo, d_hi = lateral_corridor(
                 guess_x, problem.obstacles, problem.lane_d_min_m - LANE_BACKSTOP_M,
                 problem.lane_d_max_m + LANE_BACKSTOP_M, par, cfg.obstacle_margin_m, kappa,
-                cfg.dt_s, max_swing_rad=0.0, exact_reach=cfg.exact_body_reach)
+                cfg.dt_s, max_swing_rad=0.0, exact_reach=cfg.corridor_exact_reach)
         else:
             # Without the rows (the default), and while evading, the corridor counts the
             # guess's swing up to MAX_SWING_HEADING_RAD: evading, the heading reaches 0.3-0.5
             # rad and the obstacle margin covers the corners.
             d_lo, d_hi = lateral_corridor(
                 guess_x, problem.obstacles, problem.lane_d_min_m, problem.lane_d_max_m, par,
-                cfg.obstacle_margin_m, kappa, cfg.dt_s, exact_reach=cfg.exact_body_reach)
+                cfg.obstacle_margin_m, kappa, cfg.dt_s, exact_reach=cfg.corridor_exact_reach)
         yref, weights = tracking_reference(
             cfg, stage.curvature_1pm, stage.mu_hat, mode, float(x0[State.vx]),
             speed_ref, problem.reference_d_m,

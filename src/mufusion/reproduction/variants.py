@@ -171,7 +171,8 @@ PAPER_METHOD: tuple[str, ...] = (
 go beyond it: the vehicle's yaw stability control, which the authors' plant did not have
 (:mod:`mufusion.vehicle.stability_control`, docs/decisions/0082), friction probing and lane
 recovery (:mod:`mufusion.sim.supervision`), the curve-
-and friction-aware speed reference (:mod:`mufusion.planner.speed_profile`), stopping in front
+and friction-aware speed reference (:mod:`mufusion.planner.speed_profile`) and with it the
+body's fit (:mod:`mufusion.planner.body_fit`), stopping in front
 of an obstacle where possible (:mod:`mufusion.sim.obstacle_response`) and plans whose front
 force changes no faster than the steering can turn (:mod:`mufusion.planner.front_force`),
 longitudinal forces that follow the torques' lag and axle loads that follow the plan's own

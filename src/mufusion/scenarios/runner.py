@@ -41,12 +41,7 @@ from mufusion.planner import (
 )
 from mufusion.planner.speed_profile import MAX_LOOKAHEAD_M
 from mufusion.road import Obstacle, Road, obstacle_corners
-from mufusion.scenarios.config import (
-    AnyScenario,
-    PopupScenario,
-    perturbed,
-    planner_lane_bounds_m,
-)
+from mufusion.scenarios.config import AnyScenario, PopupScenario, perturbed, planner_lane_bounds_m
 from mufusion.scenarios.feasibility import classify_scenario
 from mufusion.scenarios.road_kind import RoadScenario
 from mufusion.scenarios.shared_section import scenario_inbox
@@ -99,6 +94,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         axle_friction=cfg.planner.axle_friction,
         lane_d_min_m=lo,
         lane_d_max_m=hi,
+        body_fit=cfg.planner.body_fit,
         safety=cfg.safety,
         obstacle_margin_m=cfg.planner.obstacle_margin_m,
         stiffness=cfg.planner.stiffness,

@@ -189,8 +189,15 @@ class PlannerSettings(_Strict):
     exact_body_reach: bool = PlannerConfig.exact_body_reach
     """The corridor shrinks by the body's long sides' reach at the guess's heading on the
     stage's curvature, swing and bulge as one geometry
-    (:func:`mufusion.planner.corridor.body_reach_m`); off (the default: measured, not adopted,
-    docs/decisions/0093), the ends' swing and a centred body's bulge counted apart."""
+    (:func:`mufusion.planner.corridor.body_reach_m`) even without ``body_fit``, which implies
+    it; off (the default), with ``body_fit`` off or without the curve speed reference, the
+    ends' swing and a centred body's bulge counted apart (alone: measured, not adopted,
+    docs/decisions/0093)."""
+    body_fit: bool = PlannerConfig.body_fit
+    """With the curve speed reference: the reference corners no faster than the plans' steady
+    attitude (the body turned by its rear tire's slip angle) leaves their corridor a width, and
+    the corridor counts the body's reach as one geometry (:mod:`mufusion.planner.body_fit`,
+    docs/decisions/0097); off: the point mass's curve speeds, whatever the lane's width."""
     lane_slack_lead: Annotated[float, Field(ge=1.0, le=1e3)] = PlannerConfig.lane_slack_lead
     """How many times more a plan's leaving its corridor (lane and obstacles) costs at the first
     stage than at the horizon's end, geometrically in between, so that a plan that cannot keep

@@ -11,9 +11,11 @@ fit the lane (``a_f``, ``a_r``: centre of gravity to the body's front and rear).
 (the truck's: 7 /rad per unit load) needs 0.18 rad of slip at 0.88 of μ 0.9, and its
 6.28 m × 2.6 m body at that attitude spans 3.51 m: it cannot corner at the planner's
 utilisation on a dry road inside a 3.5 m lane, wherever its centre is (docs/decisions/0079,
-0090). The cap found here bounds the point mass's lateral acceleration in the speed profile
-(:func:`~mufusion.scenarios.feasibility.profile.backward_profile`); where the tire peaks before
-the body fills the lane (the car; low friction) it is 1 and the verdict is the point mass's.
+0090). The cap found here bounds the point mass's lateral acceleration in the oracle's speed
+profile (:func:`~mufusion.scenarios.feasibility.profile.backward_profile`); where the tire peaks
+before the body fills the lane (the car; low friction) it is 1 and the verdict is the point
+mass's. (The planner bounds its curve speeds the same way on its own linear tire and corridor:
+:mod:`mufusion.planner.body_fit`.)
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from scipy.optimize import brentq
+from scipy.optimize import brentq, minimize_scalar
 
 from mufusion.vehicle.params import TireParams, VehicleParams
 from mufusion.vehicle.tires import tire_forces_scalar
@@ -88,26 +90,35 @@ class BodyInLane:
     def lateral_cap(self, mu: float, curvature_1pm: float) -> float:
         """Highest steady lateral utilisation ``v² κ / (μ g)`` at which the body still fits
         the lane on curvature ``curvature_1pm`` [1/m] and friction ``mu`` (1: the tire peaks
-        first, or the body does not fit even straight, which the oracle judges elsewhere)."""
+        first, or the body fits at no attitude the steady turn can take, which the oracle
+        judges elsewhere)."""
         kappa = abs(curvature_1pm)
         heading = _fitting_heading_rad(kappa, self.lane_width_m, self.width_m, self.front_m,
                                        self.rear_m)
-        if heading is None:
+        slip = None if heading is None else heading + self.rear_axle_m * kappa
+        if slip is None or slip <= 0.0:
             return 1.0
-        return _utilization_at(heading + self.rear_axle_m * kappa, mu, self.tire_of_mu(mu))
+        return _utilization_at(slip, mu, self.tire_of_mu(mu))
 
 
 @functools.lru_cache(maxsize=65536)
 def _fitting_heading_rad(kappa: float, lane_m: float, width_m: float, front_m: float,
                          rear_m: float) -> float | None:
-    """The heading at which the body spans the whole lane (None: it does not fit at 0 or fits
-    at any heading up to π/4)."""
+    """The largest heading at which the body spans no more than the lane (None: it does not
+    fit at its narrowest attitude, or fits at any heading up to π/4).
+
+    On a curve the body spans least turned slightly nose out of it (its longer rear end then
+    swings no further out than its front end bulges), so the search starts there: a body that
+    does not fit straight may still fit below the heading a slow turn gives it.
+    """
     def excess(psi: float) -> float:
         return footprint_span_m(psi, kappa, width_m, front_m, rear_m) - lane_m
 
-    if excess(0.0) >= 0.0 or excess(0.25 * math.pi) <= 0.0:
+    narrowest = float(minimize_scalar(excess, bounds=(-0.25 * math.pi, 0.25 * math.pi),
+                                      method="bounded", options={"xatol": 1e-9}).x)
+    if excess(narrowest) >= 0.0 or excess(0.25 * math.pi) <= 0.0:
         return None
-    return float(brentq(excess, 0.0, 0.25 * math.pi, xtol=1e-9))
+    return float(brentq(excess, narrowest, 0.25 * math.pi, xtol=1e-9))
 
 
 def _utilization_at(slip_angle_rad: float, mu: float, tire: TireParams) -> float:
