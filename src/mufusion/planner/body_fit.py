@@ -91,15 +91,18 @@ def body_fit_cap(params: VehicleParams, band_m: float, utilization_factor: float
     """
     heading = fitting_heading_table(params, float(band_m), bool(exact_reach))
     l_r = params.cog_to_rear_axle_m
+    # The vehicle's own tire: one stiffness per load whatever μ̂ (a table's follows μ̂).
+    fixed = (None if surface_tires is not None
+             else float(rear_cornering_stiffness_n_per_rad(params, 1.0, utilization_factor)))
 
     def cap(mu_hat: np.ndarray, curvature_1pm: np.ndarray) -> np.ndarray:
         mu = np.maximum(np.asarray(mu_hat, dtype=float), 1e-3)
         kappa = np.minimum(np.abs(np.asarray(curvature_1pm, dtype=float)),
                            CURVATURE_GRID_1PM[-1])
         slip = np.interp(kappa, CURVATURE_GRID_1PM, heading) + l_r * kappa
-        per_load = np.asarray(rear_cornering_stiffness_n_per_rad(
-            params, np.ones_like(mu), utilization_factor, mu_hat=mu, table=surface_tires),
-            dtype=float)
+        per_load = fixed if fixed is not None else np.asarray(
+            rear_cornering_stiffness_n_per_rad(params, np.ones_like(mu), utilization_factor,
+                                               mu_hat=mu, table=surface_tires), dtype=float)
         with np.errstate(invalid="ignore"):
             u = np.where(slip > 0.0, slip * per_load / mu, np.nan)
         return np.where(np.isfinite(u), np.minimum(u, 1.0), 1.0)
