@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from mufusion.metrics import compute_metrics
+from mufusion.planner.minimal_risk import AT_REST_MPS
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.runner import run_scenario
 
@@ -36,3 +38,24 @@ def test_it_stops_where_a_stop_fits_and_swerved_before() -> None:
     assert set(log.planning_steps["mode"]) == {"emergency"}
     paper = _run(14.0, 35.0, 0.75, 1.5, "planner.brake_first=false")[0]
     assert set(paper.planning_steps["mode"]) == {"evade"}
+
+
+def test_a_stop_at_rest_is_held_not_failed() -> None:
+    # The car (μ 0.5, 14 m/s, obstacle 30 m ahead) stops short in lane at 3.5 s. From
+    # then on its emergency QPs failed at every step (status 4: at rest the model has no slip
+    # angles), 26 fallbacks in a run that went right; the stop is now held (decision 0098).
+    cfg = load_scenario("popup", overrides=[
+        "vehicle=car", "friction.mu=0.5", "initial_speed_mps=14", "obstacle.distance_m=30",
+        "duration_s=5.0",
+    ])
+    log = run_scenario(cfg, "GT")
+    m = compute_metrics(log)
+    assert not m.collision and not m.left_lane and m.final_speed_mps < 0.1
+    steps, ts = log.planning_steps, log.timeseries
+    speed = np.interp(steps["t_s"], ts["t_s"], ts["speed_mps"])
+    at_rest = speed < AT_REST_MPS
+    assert at_rest.sum() >= 10  # a second and more at rest
+    assert steps["held"][at_rest].all() and not steps["fallback"][at_rest].any()
+    assert not steps["held"][~at_rest].any()
+    held_from = float(steps["t_s"][steps["held"]].min())
+    assert np.ptp(ts["s_m"][ts["t_s"] >= held_from]) < 1e-3

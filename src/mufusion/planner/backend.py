@@ -2,9 +2,16 @@
 
 from __future__ import annotations
 
-from typing import Protocol
+import logging
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from mufusion.planner.config import PlannerConfig
+    from mufusion.vehicle.params import VehicleParams
+
+_log = logging.getLogger(__name__)
 
 
 class PlannerBackend(Protocol):
@@ -40,3 +47,18 @@ class PlannerBackend(Protocol):
     ) -> tuple[int, np.ndarray, np.ndarray]: ...
 
     def reset(self) -> None: ...
+
+
+def default_backend(params: VehicleParams, config: PlannerConfig) -> PlannerBackend:
+    """acados RTI for ``config.backend == "acados"`` (CasADi + IPOPT where acados cannot be
+    built or loaded, with a warning), else CasADi + IPOPT."""
+    if config.backend == "acados":
+        try:
+            from mufusion.planner.acados_backend import AcadosBackend
+
+            return AcadosBackend(params, config)
+        except Exception as exc:  # any build/load failure → reference backend
+            _log.warning("acados unavailable (%s); falling back to the CasADi backend", exc)
+    from mufusion.planner.casadi_backend import CasadiBackend
+
+    return CasadiBackend(params, config)

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mufusion.planner.config import PlannerMode
 from mufusion.planner.integration import stage_steps
 from mufusion.planner.ocp import PlannerConfig, longitudinal_force_bounds_n
 from mufusion.planner.sampling import SamplingConfig, rk4_step, steering_force_n
@@ -47,6 +48,14 @@ from mufusion.vehicle.planner_model import (
 
 # Share of each axle's friction limit the braking force may use; the rest stays for steering.
 BRAKING_SHARE_OF_LIMIT = 0.8
+
+AT_REST_MPS = 0.1
+"""Below this speed [m/s] (the body's, ``hypot(v_x, v_y)``: a spinning vehicle's ``v_x`` passes
+through 0 while it slides) a vehicle that is stopping has stopped."""
+HELD_AT_REST_MODES: tuple[PlannerMode, ...] = ("emergency", "minimal_risk")
+"""The stopping modes whose plan, once the vehicle is at rest (:data:`AT_REST_MPS`), is the
+stop held with the brakes on (:func:`~mufusion.planner.rti.held_plan`), not a solve: at rest
+the OCP's lateral model has no slip angles and its QPs fail (docs/decisions/0098)."""
 
 
 def minimal_risk_rollout(

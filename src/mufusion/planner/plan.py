@@ -55,6 +55,9 @@ class Plan:
     consecutive_fallbacks: int = 0
     mu_sanitized_stages: int = 0
     mode: str = "cruise"
+    held: bool = False
+    """A stop at rest held with the brakes on, not solved
+    (:func:`~mufusion.planner.rti.held_plan`)."""
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mufusion.planner.backend import PlannerBackend
+from mufusion.planner.backend import PlannerBackend, default_backend
 from mufusion.planner.config import (
     PLANNER_MODES,
     CostWeights,
@@ -32,11 +32,11 @@ from mufusion.planner.config import (
     PlannerMode,
     PlannerObstacle,
 )
-from mufusion.planner.minimal_risk import minimal_risk_rollout
+from mufusion.planner.minimal_risk import AT_REST_MPS, HELD_AT_REST_MODES, minimal_risk_rollout
 from mufusion.planner.ocp_state import anchored_first_forces
 from mufusion.planner.passing import in_path
 from mufusion.planner.plan import FallbackReason, Plan
-from mufusion.planner.rti import Iterated, StepProblem, iterate, plan_of
+from mufusion.planner.rti import Iterated, StepProblem, held_plan, iterate, plan_of
 from mufusion.planner.safeguards import FrictionProfile, SanitizedFriction
 from mufusion.planner.sampling import SamplingConfig, rk4_step, sampled_guess
 from mufusion.planner.unseen_road import UnseenRoad
@@ -88,19 +88,6 @@ class PlannerMemory:
     ``previous``'s own states and inputs (``None``: none)."""
 
 
-def _default_backend(params: VehicleParams, config: PlannerConfig) -> PlannerBackend:
-    if config.backend == "acados":
-        try:
-            from mufusion.planner.acados_backend import AcadosBackend
-
-            return AcadosBackend(params, config)
-        except Exception as exc:  # any build/load failure → reference backend
-            _log.warning("acados unavailable (%s); falling back to the CasADi backend", exc)
-    from mufusion.planner.casadi_backend import CasadiBackend
-
-    return CasadiBackend(params, config)
-
-
 class TractionAdaptivePlanner:
     """Real-time traction-adaptive planner; keeps the warm start between calls.
 
@@ -133,7 +120,7 @@ class TractionAdaptivePlanner:
         self._prev: Plan | None = None
         self._mu_profile: FrictionProfile | None = None
         self._carried: tuple[np.ndarray, np.ndarray] | None = None
-        self._backend = backend if backend is not None else _default_backend(params, self.config)
+        self._backend = backend if backend is not None else default_backend(params, self.config)
 
     @property
     def backend(self) -> PlannerBackend:
@@ -258,6 +245,8 @@ class TractionAdaptivePlanner:
             as the friction allows) or ``"minimal_risk"`` (brake to a stop at
             ``minimal_risk_decel_fraction · μ̂ g`` holding ``reference_d_m``, the lane centre;
             falls back to a solver-free roll-out, see :mod:`mufusion.planner.minimal_risk`).
+            In the last two, a vehicle at rest is held with the brakes on, no solve
+            (``Plan.held``; :func:`~mufusion.planner.rti.held_plan`).
         reference_speed_mps, reference_d_m
             Cruise references.
         lane_d_min_m, lane_d_max_m
@@ -302,6 +291,8 @@ class TractionAdaptivePlanner:
             cfg.lane_d_max_m if lane_d_max_m is None else lane_d_max_m,
             unseen_road,
         )
+        if mode in HELD_AT_REST_MODES and float(np.hypot(x0[State.vx], x0[State.vy])) < AT_REST_MPS:
+            return self._held(problem, t_s)
         started = time.perf_counter()
         guess_x, guess_u, sampled = self._guess(problem, t_s, front_force_n,
                                                 longitudinal_forces_n)
@@ -391,8 +382,16 @@ class TractionAdaptivePlanner:
             self._reinitialise_backend()
         return solved.guess_x, solved.guess_u
 
+    def _held(self, problem: StepProblem, t_s: float) -> Plan:
+        """A stop at rest, held (:func:`~mufusion.planner.rti.held_plan`); the solver starts
+        afresh when the vehicle moves off again, as it did after the failed solves at rest."""
+        if self._prev is None or not self._prev.held:
+            self._reinitialise_backend()
+        self._consecutive_fallbacks, self._carried = 0, None
+        self._prev = held_plan(self.params, self.config, problem, t_s, self.sampling)
+        return self._prev
+
     def _reinitialise_backend(self) -> None:
-        # A failed QP can leave NaN multipliers that poison every later RTI step.
         try:
             self._backend.reset()
         except Exception as exc:  # never raise inside the loop

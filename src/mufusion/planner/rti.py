@@ -12,13 +12,14 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from mufusion.planner.backend import PlannerBackend
 from mufusion.planner.body_fit import body_fit_cap, body_fitted_curvature
 from mufusion.planner.config import PlannerConfig, PlannerMode, PlannerObstacle
+from mufusion.planner.minimal_risk import minimal_risk_rollout
 from mufusion.planner.ocp import (
     axle_loads_n,
     lateral_corridor,
@@ -34,6 +35,7 @@ from mufusion.planner.safeguards import (
     SanitizedFriction,
     judge_solution,
 )
+from mufusion.planner.sampling import SamplingConfig
 from mufusion.planner.speed_ceiling import speed_ceiling_mps
 from mufusion.planner.speed_profile import (
     curve_speed_reference_mps,
@@ -249,3 +251,21 @@ def plan_of(
         consecutive_fallbacks=consecutive_fallbacks,
         mu_sanitized_stages=problem.mu_of_s.last_count, mode=problem.mode,
     )
+
+
+def held_plan(par: VehicleParams, cfg: PlannerConfig, problem: StepProblem, t_s: float,
+              sampling: SamplingConfig | None = None) -> Plan:
+    """The plan of a stop at rest: the vehicle held where it is with the brakes on (the
+    minimal-risk roll-out below the model's slip-speed floor,
+    :func:`~mufusion.planner.minimal_risk.minimal_risk_rollout`), marked ``held``, no solve.
+    At rest the OCP's lateral model has no slip angles and its QPs fail at every step; a held
+    stop is a plan, not a fallback (docs/decisions/0098)."""
+    started = time.perf_counter()
+    xs, us = minimal_risk_rollout(problem.x0, problem.reference_d_m, problem.curvature_of_s,
+                                  problem.mu_of_s, par, cfg, sampling)
+    stage = stage_parameters(xs, us, problem.curvature_of_s, problem.mu_of_s, par,
+                             cfg.utilization_factor, cfg.stiffness_table, None,
+                             cfg.polygon_sides)
+    held = Iterated(xs, us, xs, us, stage, 0, FallbackReason.NONE, False)
+    return replace(plan_of(par, cfg, problem, held, (xs, us), t_s, started, False, 0),
+                   held=True)

@@ -20,6 +20,7 @@ import numpy as np
 from mufusion.configurations import FrictionEstimate
 from mufusion.estimators import SensorModel
 from mufusion.planner import Plan
+from mufusion.planner.minimal_risk import AT_REST_MPS
 from mufusion.planner.safety import SafetySettings
 from mufusion.planner.speed_profile import MAX_LOOKAHEAD_M
 from mufusion.sim.components import (
@@ -35,7 +36,7 @@ from mufusion.sim.events import EventKind
 from mufusion.sim.faults import Fault, active_kinds, estimate_delay_s
 from mufusion.sim.lane_recovery import LaneRecovery
 from mufusion.sim.log import RunLog
-from mufusion.sim.minimal_risk import AT_REST_MPS, MINIMAL_RISK_MODE, MinimalRisk
+from mufusion.sim.minimal_risk import MINIMAL_RISK_MODE, MinimalRisk
 from mufusion.sim.obstacle_response import ObstacleResponse
 from mufusion.sim.planning import Planning
 from mufusion.sim.probing import Probing
@@ -291,7 +292,8 @@ class ClosedLoop:
                 self._recorder.event(t, EventKind.PLANNER_ERROR, reason)
         step_ms = 1e3 * (time.perf_counter() - started)
         mrm.count(plan is None or plan.fallback,
-                  at_rest_braking=mode == "emergency" and float(xf[State.vx]) < AT_REST_MPS)
+                  at_rest_braking=mode == "emergency"
+                  and float(np.hypot(xf[State.vx], xf[State.vy])) < AT_REST_MPS)
         if plan is not None and not plan.ok:
             _log.warning("planning step %d at t=%.2f s: solver status %s", step, t, plan.status)
         self._recorder.planning_step(

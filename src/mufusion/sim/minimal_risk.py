@@ -19,18 +19,17 @@ from mufusion.vehicle.params import VehicleParams
 
 MINIMAL_RISK_MODE: PlannerMode = "minimal_risk"
 """The planner's mode during the minimal-risk manoeuvre: brake to a stop in lane."""
-AT_REST_MPS = 0.1
-"""Below this speed [m/s] a vehicle stopping for an obstacle has stopped."""
 
 
 class MinimalRisk:
     """When the loop enters the minimal-risk manoeuvre, and its command while it cannot plan.
 
     After ``safety.max_consecutive_fallbacks`` planning steps in a row without a usable plan
-    (not counting those at rest in front of an obstacle, :data:`AT_REST_MPS`), or at once when
-    a component raises (:meth:`enter`), the manoeuvre starts; it is latched until the end of
-    the run. The planner then plans a stop in lane (:data:`MINIMAL_RISK_MODE`); while it cannot,
-    the loop brakes in lane itself (:meth:`command`).
+    (not counting those at rest in front of an obstacle,
+    :data:`~mufusion.planner.minimal_risk.AT_REST_MPS`), or at once when a component raises
+    (:meth:`enter`), the manoeuvre starts; it is latched until the end of the run. The planner
+    then plans a stop in lane (:data:`MINIMAL_RISK_MODE`); while it cannot, the loop brakes in
+    lane itself (:meth:`command`).
 
     Parameters
     ----------
@@ -61,7 +60,8 @@ class MinimalRisk:
         """Count a planning step; ``failed``: it gave no usable plan."""
         self.planner_usable = not failed
         # Stopped for an obstacle, the manoeuvre's stop is done: a failed plan (the model is stiff
-        # at rest) keeps the vehicle held and starts nothing.
+        # at rest; the package's planner holds such a stop without a solve, a plug-in may not)
+        # keeps the vehicle held and starts nothing.
         self.consecutive_fallbacks = (
             0 if not failed else self.consecutive_fallbacks + (not at_rest_braking)
         )

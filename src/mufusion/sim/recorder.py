@@ -155,6 +155,7 @@ class Recorder:
                 local_mu=finite_or_nan(estimate.local_mu),
                 estimate_source=estimate_source,
                 estimate_age_s=estimate_age_s,
+                held=plan is not None and bool(plan.held),
             )
         )
         solve_ms = math.nan if plan is None else 1e3 * plan.solve_time_s

@@ -123,6 +123,9 @@ class PlanningStep:
     estimate_source: str
     """``current``, ``delayed`` (an injected delay), ``last_valid`` or ``floor``."""
     estimate_age_s: float
+    held: bool = False
+    """The step held a stop at rest with the brakes on instead of solving (the plan's
+    ``held``; docs/decisions/0098)."""
 
 
 @dataclass(frozen=True)
