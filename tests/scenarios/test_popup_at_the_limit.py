@@ -42,8 +42,9 @@ def test_it_stops_where_a_stop_fits_and_swerved_before() -> None:
 
 def test_a_stop_at_rest_is_held_not_failed() -> None:
     # The car (μ 0.5, 14 m/s, obstacle 30 m ahead) stops short in lane at 3.5 s. From
-    # then on its emergency QPs failed at every step (status 4: at rest the model has no slip
-    # angles), 26 fallbacks in a run that went right; the stop is now held (decision 0098).
+    # then on its emergency QPs failed at every step (status 4: at rest with the brakes on the
+    # model's kinetic braking drives its speed below the bound), 26 fallbacks in a run that went
+    # right; the stop is now held (decision 0098).
     cfg = load_scenario("popup", overrides=[
         "vehicle=car", "friction.mu=0.5", "initial_speed_mps=14", "obstacle.distance_m=30",
         "duration_s=5.0",

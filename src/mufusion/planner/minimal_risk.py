@@ -54,8 +54,10 @@ AT_REST_MPS = 0.1
 through 0 while it slides) a vehicle that is stopping has stopped."""
 HELD_AT_REST_MODES: tuple[PlannerMode, ...] = ("emergency", "minimal_risk")
 """The stopping modes whose plan, once the vehicle is at rest (:data:`AT_REST_MPS`), is the
-stop held with the brakes on (:func:`~mufusion.planner.rti.held_plan`), not a solve: at rest
-the OCP's lateral model has no slip angles and its QPs fail (docs/decisions/0098)."""
+stop held with the brakes on (:func:`~mufusion.planner.rti.held_plan`), not a solve: the
+model's brakes are kinetic friction, so the braking the wheels deliver at rest (where the plan's
+forces start, 0068) would drive it backwards, against the speed's bound: the QP is infeasible
+(docs/decisions/0098)."""
 
 
 def minimal_risk_rollout(

@@ -59,8 +59,9 @@ class MinimalRisk:
     def count(self, failed: bool, at_rest_braking: bool) -> None:
         """Count a planning step; ``failed``: it gave no usable plan."""
         self.planner_usable = not failed
-        # Stopped for an obstacle, the manoeuvre's stop is done: a failed plan (the model is stiff
-        # at rest; the package's planner holds such a stop without a solve, a plug-in may not)
+        # Stopped for an obstacle, the manoeuvre's stop is done: a failed plan (at rest with the
+        # brakes on the package's OCP is infeasible: it holds such a stop without a solve; a
+        # plug-in may not)
         # keeps the vehicle held and starts nothing.
         self.consecutive_fallbacks = (
             0 if not failed else self.consecutive_fallbacks + (not at_rest_braking)
