@@ -83,3 +83,19 @@ def test_everything_else_is_solved(counted, speed_mps, mode) -> None:
     solves = backend.solves
     plan = _step(planner, speed_mps, mode)
     assert backend.solves > solves and not plan.held
+
+
+@pytest.mark.parametrize(("forces_n", "held"), [((-20000.0, -10000.0), True),
+                                                 ((-2000.0, -1000.0), False)])
+def test_a_stop_the_delivered_braking_ends_whatever_the_plan_is_held(counted, forces_n,
+                                                                         held) -> None:
+    # The truck at 0.2 m/s, braked by 30 kN (3.6 m/s²): even released at once (τ 0.15 s) the
+    # brakes take 0.54 m/s off, so the OCP's speed would fall below its bound; braked by 3 kN
+    # (0.05 m/s) it can still plan the stop's end.
+    planner, backend = counted
+    planner.reset()
+    solves = backend.solves
+    x0 = np.array([80.0, 0.1, 0.0, 0.0, 0.2, 0.0])
+    plan = planner.step(x0, 0.0, _straight, _mu, [], "emergency", 0.0,
+                        longitudinal_forces_n=forces_n)
+    assert plan.held is held and (backend.solves == solves) is held and not plan.fallback

@@ -56,7 +56,8 @@ def test_a_stop_at_rest_is_held_not_failed() -> None:
     speed = np.interp(steps["t_s"], ts["t_s"], ts["speed_mps"])
     at_rest = speed < AT_REST_MPS
     assert at_rest.sum() >= 10  # a second and more at rest
-    assert steps["held"][at_rest].all() and not steps["fallback"][at_rest].any()
-    assert not steps["held"][~at_rest].any()
-    held_from = float(steps["t_s"][steps["held"]].min())
-    assert np.ptp(ts["s_m"][ts["t_s"] >= held_from]) < 1e-3
+    assert steps["held"][at_rest].all() and not steps["fallback"].any()
+    # Held besides only the step whose delivered braking ends the stop within its first stage.
+    assert steps["held"][~at_rest].sum() <= 1 and (speed[steps["held"]] < 0.3).all()
+    rest_from = float(steps["t_s"][at_rest].min())
+    assert np.ptp(ts["s_m"][ts["t_s"] >= rest_from]) < 1e-3

@@ -60,6 +60,36 @@ forces start, 0068) would drive it backwards, against the speed's bound: the QP 
 (docs/decisions/0098)."""
 
 
+
+def stop_is_held(mode: str, x0: np.ndarray, longitudinal_forces_n: tuple[float, float] | None,
+                 params: VehicleParams, config: PlannerConfig) -> bool:
+    """Whether a step of a stopping mode (:data:`HELD_AT_REST_MODES`) holds the stop instead of
+    solving: the vehicle is at rest (:data:`AT_REST_MPS`), or, with the longitudinal forces
+    planned as lagged states (``config.torque_lag``), the braking the wheels deliver now
+    (``longitudinal_forces_n``) brings it to rest even if released at once: the lagged force
+    decays as ``e^{−t/τ}`` and takes ``a τ`` off the speed in all, so where ``v < a τ`` the OCP's
+    speed would go below its bound and its QP is infeasible (docs/decisions/0098).
+
+    >>> from mufusion.vehicle.params import CAR
+    >>> from mufusion.planner.ocp import PlannerConfig
+    >>> x0 = np.array([0.0, 0.0, 0.0, 0.0, 0.2, 0.0])  # the car: 5.5 m/s², τ 0.05 s: 0.27 m/s
+    >>> [stop_is_held(m, x0, f, CAR, PlannerConfig()) for m, f in
+    ...  [("emergency", (-4000.0, -2000.0)), ("emergency", (0.0, 0.0)), ("cruise", None)]]
+    [True, False, False]
+    """
+    if mode not in HELD_AT_REST_MODES:
+        return False
+    speed = float(np.hypot(x0[State.vx], x0[State.vy]))
+    if speed < AT_REST_MPS:
+        return True
+    if not config.torque_lag or longitudinal_forces_n is None:
+        return False
+    decel = -float(sum(longitudinal_forces_n)) / params.mass_kg
+    if not math.isfinite(decel) or decel <= 0.0:
+        return False
+    return speed < decel * params.torque_time_constant_s
+
+
 def minimal_risk_rollout(
     x0: np.ndarray,
     reference_d_m: float,

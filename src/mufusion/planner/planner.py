@@ -32,7 +32,7 @@ from mufusion.planner.config import (
     PlannerMode,
     PlannerObstacle,
 )
-from mufusion.planner.minimal_risk import AT_REST_MPS, HELD_AT_REST_MODES, minimal_risk_rollout
+from mufusion.planner.minimal_risk import minimal_risk_rollout, stop_is_held
 from mufusion.planner.ocp_state import anchored_first_forces
 from mufusion.planner.passing import in_path
 from mufusion.planner.plan import FallbackReason, Plan
@@ -245,8 +245,9 @@ class TractionAdaptivePlanner:
             as the friction allows) or ``"minimal_risk"`` (brake to a stop at
             ``minimal_risk_decel_fraction · μ̂ g`` holding ``reference_d_m``, the lane centre;
             falls back to a solver-free roll-out, see :mod:`mufusion.planner.minimal_risk`).
-            In the last two, a vehicle at rest is held with the brakes on, no solve
-            (``Plan.held``; :func:`~mufusion.planner.rti.held_plan`).
+            In the last two, a vehicle at rest, or one its brakes bring to rest whatever it
+            plans, is held with the brakes on, no solve (``Plan.held``;
+            :func:`~.minimal_risk.stop_is_held`).
         reference_speed_mps, reference_d_m
             Cruise references.
         lane_d_min_m, lane_d_max_m
@@ -291,7 +292,7 @@ class TractionAdaptivePlanner:
             cfg.lane_d_max_m if lane_d_max_m is None else lane_d_max_m,
             unseen_road,
         )
-        if mode in HELD_AT_REST_MODES and float(np.hypot(x0[State.vx], x0[State.vy])) < AT_REST_MPS:
+        if stop_is_held(mode, x0, longitudinal_forces_n, self.params, cfg):
             return self._held(problem, t_s)
         started = time.perf_counter()
         guess_x, guess_u, sampled = self._guess(problem, t_s, front_force_n,
