@@ -53,12 +53,16 @@ AT_REST_MPS = 0.1
 """Below this speed [m/s] (the body's, ``hypot(v_x, v_y)``: a spinning vehicle's ``v_x`` passes
 through 0 while it slides) a vehicle that is stopping has stopped."""
 HELD_AT_REST_MODES: tuple[PlannerMode, ...] = ("emergency", "minimal_risk")
-"""The stopping modes whose plan, once the vehicle is at rest (:data:`AT_REST_MPS`), is the
-stop held with the brakes on (:func:`~mufusion.planner.rti.held_plan`), not a solve: the
-model's brakes are kinetic friction, so the braking the wheels deliver at rest (where the plan's
-forces start, 0068) would drive it backwards, against the speed's bound: the QP is infeasible
+"""The stopping modes whose plan, once the stop is done (:func:`stop_is_held`), is the stop
+held with the brakes on (:func:`~mufusion.planner.rti.held_plan`), not a solve: the model's
+brakes are kinetic friction, so the braking the wheels deliver (where the plan's forces start,
+0068) would drive it backwards, against the speed's bound: the QP is infeasible
 (docs/decisions/0098)."""
 
+
+def at_rest(x: np.ndarray) -> bool:
+    """Whether the Frenet state ``x`` is at rest: its body speed below :data:`AT_REST_MPS`."""
+    return float(np.hypot(x[State.vx], x[State.vy])) < AT_REST_MPS
 
 
 def stop_is_held(mode: str, x0: np.ndarray, longitudinal_forces_n: tuple[float, float] | None,
@@ -79,9 +83,9 @@ def stop_is_held(mode: str, x0: np.ndarray, longitudinal_forces_n: tuple[float, 
     """
     if mode not in HELD_AT_REST_MODES:
         return False
-    speed = float(np.hypot(x0[State.vx], x0[State.vy]))
-    if speed < AT_REST_MPS:
+    if at_rest(x0):
         return True
+    speed = float(np.hypot(x0[State.vx], x0[State.vy]))
     if not config.torque_lag or longitudinal_forces_n is None:
         return False
     decel = -float(sum(longitudinal_forces_n)) / params.mass_kg

@@ -258,9 +258,9 @@ def held_plan(par: VehicleParams, cfg: PlannerConfig, problem: StepProblem, t_s:
     """The plan of a stop at rest: the vehicle held where it is with the brakes on (the
     minimal-risk roll-out below the model's slip-speed floor,
     :func:`~mufusion.planner.minimal_risk.minimal_risk_rollout`), marked ``held``, no solve.
-    At rest with the brakes on, the OCP's braking (kinetic, from the forces the wheels deliver)
-    would take the speed below its bound within the first stage and the QP is infeasible; a held
-    stop is a plan, not a fallback (docs/decisions/0098)."""
+    Where the braking the wheels deliver ends the stop whatever is planned, the OCP's kinetic
+    braking would take the speed below its bound and the QP is infeasible; a held stop is a
+    plan, not a fallback (docs/decisions/0098)."""
     started = time.perf_counter()
     xs, us = minimal_risk_rollout(problem.x0, problem.reference_d_m, problem.curvature_of_s,
                                   problem.mu_of_s, par, cfg, sampling)

@@ -20,7 +20,7 @@ import numpy as np
 from mufusion.configurations import FrictionEstimate
 from mufusion.estimators import SensorModel
 from mufusion.planner import Plan
-from mufusion.planner.minimal_risk import AT_REST_MPS
+from mufusion.planner.minimal_risk import at_rest
 from mufusion.planner.safety import SafetySettings
 from mufusion.planner.speed_profile import MAX_LOOKAHEAD_M
 from mufusion.sim.components import (
@@ -292,8 +292,7 @@ class ClosedLoop:
                 self._recorder.event(t, EventKind.PLANNER_ERROR, reason)
         step_ms = 1e3 * (time.perf_counter() - started)
         mrm.count(plan is None or plan.fallback,
-                  at_rest_braking=mode == "emergency"
-                  and float(np.hypot(xf[State.vx], xf[State.vy])) < AT_REST_MPS)
+                  at_rest_braking=mode == "emergency" and at_rest(xf))
         if plan is not None and not plan.ok:
             _log.warning("planning step %d at t=%.2f s: solver status %s", step, t, plan.status)
         self._recorder.planning_step(
