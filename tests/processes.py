@@ -12,6 +12,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -78,10 +79,33 @@ def child_environment() -> dict[str, str]:
 
 
 @contextmanager
+def _sigint_not_ignored() -> Iterator[None]:
+    """While active, SIGINT is caught (Python's KeyboardInterrupt) instead of ignored in this
+    process, so a child started meanwhile gets its default disposition.
+
+    A shell without job control starts a background command (``pytest ... &`` in a script) with
+    SIGINT ignored, and an ignored signal stays ignored across ``exec``: the commands the tests
+    send SIGINT to would then never see it (the campaign ran on to its end, measured). A caught
+    signal is reset to its default by ``exec``. Only the main thread may set a handler.
+    """
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.SIG_IGN):
+        yield
+        return
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextmanager
 def isolated(cmd: Sequence[str], **popen_kwargs) -> Iterator[subprocess.Popen]:
-    """Start ``cmd`` as the leader of a new session; on exit kill whatever of it is left."""
-    proc = subprocess.Popen(list(cmd), start_new_session=True, env=child_environment(),
-                            **popen_kwargs)
+    """Start ``cmd`` as the leader of a new session, with Ctrl-C's signal as a terminal gives it;
+    on exit kill whatever of it is left."""
+    with _sigint_not_ignored():
+        proc = subprocess.Popen(list(cmd), start_new_session=True, env=child_environment(),
+                                **popen_kwargs)
     try:
         yield proc
     finally:
