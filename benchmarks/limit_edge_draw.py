@@ -12,7 +12,9 @@ offset -0.8 to 1.2 m), and its entry speed is ``fraction`` × the oracle's highe
 kept if the oracle calls it feasible at that speed (``fraction`` below 1 / 1.05 is needed) and
 the speed lies in 5-35 m/s; the vehicles alternate.
 
-Prints a campaign file (GT and F-safe, one zipped axis: the variants as drawn)::
+Prints a campaign file (GT and F-safe unless ``--configs`` names others, built-in or a plug-in's
+import path, e.g. ``--configs GT F F-safe mypkg.estimators:SlipRLS``; one zipped axis: the
+variants as drawn)::
 
     python benchmarks/limit_edge_draw.py turn --seed 9 --variants 80 > edge_turn.toml
     mufusion campaign edge_turn.toml --out edge_turn --jobs 2
@@ -24,12 +26,15 @@ Prints a campaign file (GT and F-safe, one zipped axis: the variants as drawn)::
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
+from pydantic import ValidationError
 
+from mufusion.campaign.schema import CampaignFile
 from mufusion.scenarios import load_scenario
 from mufusion.scenarios.feasibility import FeasibilityClass, classify_scenario
 from mufusion.vehicle.params import vehicle_preset
@@ -118,8 +123,9 @@ def draw(kind: str, rng: np.random.Generator, variants: int, fraction: float) ->
     return rows
 
 
-def campaign_text(kind: str, rows: list[list[str]], seed: int, fraction: float) -> str:
-    """The campaign file: GT and F-safe over one zipped axis holding every drawn variant."""
+def campaign_text(kind: str, rows: list[list[str]], seed: int, fraction: float,
+                  configs: Sequence[str] = ("GT", "F-safe")) -> str:
+    """The campaign file: ``configs`` over one zipped axis holding every drawn variant."""
     keys = [o.partition("=")[0] for o in rows[0]]
 
     def value(text: str) -> str:
@@ -129,10 +135,11 @@ def campaign_text(kind: str, rows: list[list[str]], seed: int, fraction: float) 
             return f'"{text}"'
         return text
 
+    chosen = "" if list(configs) == ["GT", "F-safe"] else " --configs " + " ".join(configs)
     lines = [f"# python benchmarks/limit_edge_draw.py {kind} --seed {seed} "
-             f"--variants {len(rows)} --fraction {fraction}",
+             f"--variants {len(rows)} --fraction {fraction}{chosen}",
              f'name = "{kind} at {fraction} of the oracle\'s highest entry speed, seed {seed}"',
-             f'scenarios = ["{kind}"]', 'configs = ["GT", "F-safe"]', "", "[grid]",
+             f'scenarios = ["{kind}"]', f"configs = {json.dumps(list(configs))}", "", "[grid]",
              '"' + ", ".join(keys) + '" = [']
     lines += ["    [" + ", ".join(value(o.partition("=")[2]) for o in row) + "]," for row in rows]
     return "\n".join([*lines, "]", ""])
@@ -145,14 +152,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--variants", type=int, default=80)
     parser.add_argument("--fraction", type=float, default=1 / 1.07,
                         help="entry speed / the oracle's highest (default 1/1.07 = 0.935)")
+    parser.add_argument("--configs", nargs="+", default=["GT", "F-safe"],
+                        help="configurations to run: built-in names or plug-in import paths")
     args = parser.parse_args(argv)
+    try:  # before any draw: a misspelt configuration is named at once
+        CampaignFile.model_validate({"scenarios": [args.kind], "configs": args.configs})
+    except ValidationError as err:
+        parser.error("; ".join(str(e["msg"]) for e in err.errors()))
     if args.variants < 1:
         parser.error(f"--variants must be >= 1, got {args.variants}")
     if not 0.0 < args.fraction < 1.0 / 1.05:
         parser.error(f"--fraction must be in (0, {1 / 1.05:.4f}) (feasible: more than the "
                      f"oracle's 5 % band below the highest speed), got {args.fraction}")
     rows = draw(args.kind, np.random.default_rng(args.seed), args.variants, args.fraction)
-    sys.stdout.write(campaign_text(args.kind, rows, args.seed, round(args.fraction, 6)))
+    sys.stdout.write(campaign_text(args.kind, rows, args.seed, round(args.fraction, 6),
+                                   args.configs))
     return 0
 
 

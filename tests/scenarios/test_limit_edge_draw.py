@@ -49,3 +49,14 @@ def test_a_fraction_that_leaves_no_feasible_variant_is_refused(capsys):
         _script().main(["turn", "--fraction", "0.96"])
     assert stop.value.code == 2
     assert "--fraction must be in (0, 0.9524)" in capsys.readouterr().err
+
+
+def test_the_configurations_are_the_users_and_a_misspelt_one_is_named_before_any_draw(capsys):
+    edge = _script()
+    text = edge.campaign_text("popup", [["vehicle=car", "friction.mu=0.5"]], 1, 0.9,
+                              ["GT", "L", "P", "F"])
+    assert 'configs = ["GT", "L", "P", "F"]' in text and "--configs GT L P F" in text
+    with pytest.raises(SystemExit) as stop:
+        edge.main(["turn", "--configs", "GT", "Fsafe"])
+    assert stop.value.code == 2
+    assert "'Fsafe' is neither a built-in configuration" in capsys.readouterr().err
