@@ -208,6 +208,7 @@ def build_loop(
         probing=cfg.probing,
         lane_recovery=cfg.lane_recovery,
         utilization_factor=config.utilization_factor,
+        planning_horizon_s=config.horizon_steps * config.dt_s,
         estimate_grid_m=cfg.estimation.estimate_grid_m(),
         truth_reach_m=(MAX_LOOKAHEAD_M if cfg.estimation.truth_reach_m is None
                        else cfg.estimation.truth_reach_m),

@@ -19,7 +19,7 @@ import numpy as np
 
 from mufusion.configurations import FrictionEstimate
 from mufusion.estimators import SensorModel
-from mufusion.planner import Plan
+from mufusion.planner import Plan, PlannerConfig
 from mufusion.planner.minimal_risk import at_rest
 from mufusion.planner.safety import SafetySettings
 from mufusion.planner.speed_profile import MAX_LOOKAHEAD_M
@@ -91,6 +91,9 @@ class ClosedLoop:
         How the loop reacts to missing, stale or failing parts.
     probing, lane_recovery
         The supervisory behaviours of :mod:`mufusion.sim.supervision` (beyond the paper).
+    utilization_factor, planning_horizon_s
+        The planner's λ and how far ahead it plans [s] (default: the built-in planner's), for
+        the supervisors that judge the road as it does.
     obstacle_response
         Stop in front of an obstacle where possible, else evade
         (:mod:`mufusion.sim.obstacle_response`); ``emergency_on_obstacle`` overrides it.
@@ -137,7 +140,8 @@ class ClosedLoop:
     safety: SafetySettings = field(default_factory=SafetySettings)
     probing: ProbingSettings = field(default_factory=ProbingSettings)
     lane_recovery: LaneRecoverySettings = field(default_factory=LaneRecoverySettings)
-    utilization_factor: float = 0.9
+    utilization_factor: float = PlannerConfig.utilization_factor
+    planning_horizon_s: float = PlannerConfig.horizon_steps * PlannerConfig.dt_s
     obstacle_response: ObstacleResponse = field(default_factory=ObstacleResponse)
     sensors: SensorModel = field(default_factory=SensorModel)
 
@@ -166,8 +170,8 @@ class ClosedLoop:
             StopInLane(self.lane_recovery, event),
             LaneRecovery(self.lane_recovery, self.planner, self.params, self.lane_bounds_m,
                          self.world.curvature, event, self.obstacle_response.margin_m),
-            Probing(self.probing, self.utilization_factor, self.params, grid,
-                    self.world.curvature, event),
+            Probing(self.probing, self.utilization_factor, self.planning_horizon_s, self.params,
+                    grid, self.world.curvature, event),
             MinimalRisk(self.safety, self.params, event),
         )
         self._planning = Planning(

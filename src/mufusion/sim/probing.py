@@ -15,7 +15,7 @@ from mufusion.configurations import FrictionEstimate
 from mufusion.sim.components import PlanningMode
 from mufusion.sim.events import EventKind, EventSink
 from mufusion.sim.settings import ProbingSettings
-from mufusion.sim.supervision import ProbeEndReason, Prober
+from mufusion.sim.supervision import ProbeEndReason, Prober, RoadBeyond
 from mufusion.sim.supervisor import PlanningContext, Supervisor
 from mufusion.vehicle.actuators import ActuatorCommand
 from mufusion.vehicle.params import VehicleParams
@@ -38,6 +38,9 @@ class Probing(Supervisor):
     ----------
     settings, utilization_factor
         As :class:`~mufusion.sim.supervision.Prober`'s (the probe's own state).
+    planning_horizon_s
+        How far ahead the planner plans [s]: with ``settings.beyond_camera`` the trigger reads
+        the road that far at the current speed, past the estimate's grid.
     params
         Vehicle parameters (mass and axle loads for the braking torques).
     estimate_grid_m
@@ -52,6 +55,7 @@ class Probing(Supervisor):
         self,
         settings: ProbingSettings,
         utilization_factor: float,
+        planning_horizon_s: float,
         params: VehicleParams,
         estimate_grid_m: np.ndarray,
         curvature: Callable[[np.ndarray], np.ndarray],
@@ -59,6 +63,7 @@ class Probing(Supervisor):
     ) -> None:
         self.settings = settings
         self.prober = Prober(settings, utilization_factor)
+        self.planning_horizon_s = planning_horizon_s
         self.params = params
         self.grid_m = estimate_grid_m
         self.curvature = curvature
@@ -82,11 +87,28 @@ class Probing(Supervisor):
         s_ego = ctx.s_m
         near = any(o.s_m - s_ego < self.settings.clear_distance_m for o in ctx.obstacles)
         kappa = self.curvature(s_ego + self.grid_m)
-        why = self.prober.reason_to_probe(ctx.t_s, ctx.speed_mps, estimate, kappa, near)
+        why = self.prober.reason_to_probe(ctx.t_s, ctx.speed_mps, estimate, kappa, near,
+                                          self._beyond(s_ego, ctx.speed_mps, estimate))
         if why is not None:
             self.prober.start(ctx.t_s, ctx.speed_mps)
             self._event(ctx.t_s, EventKind.PROBE_START, why)
         return mode, estimate
+
+    def _beyond(self, s_ego_m: float, speed_mps: float,
+                estimate: FrictionEstimate) -> RoadBeyond | None:
+        """The road past the grid, each metre up to the first at or past the planner's reach at
+        ``speed_mps``, with the friction the estimate declares possible there (its
+        ``unseen_mu``; where it declares none, its last value holds, as the planner takes it);
+        None where the reach ends inside the grid or ``beyond_camera`` is off."""
+        end = float(self.grid_m[-1])
+        reach = speed_mps * self.planning_horizon_s
+        if not self.settings.beyond_camera or reach <= end:
+            return None
+        s = np.arange(end + 1.0, reach + 1.0, 1.0)
+        mu = (estimate.unseen_mu if estimate.unseen_mu is not None
+              else float(np.asarray(estimate.mu_hat, dtype=float)[-1]))
+        return RoadBeyond(s, np.asarray(self.curvature(s_ego_m + s), dtype=float),
+                          np.full(s.shape, mu))
 
     def shape(self, t_s: float, xf: np.ndarray, command: ActuatorCommand) -> ActuatorCommand:
         """While probing: the controller's steering, the probe's braking (or harder)."""

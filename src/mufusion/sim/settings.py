@@ -75,11 +75,18 @@ class ProbingSettings:
     clear_distance_m: float = 60.0
     cooldown_s: float = 2.0
     min_speed_mps: float = 5.0
+    # The road the trigger reads reaches as far as the planner's horizon at the current speed,
+    # past the estimate's grid (the camera's range) with the friction the estimate declares
+    # possible there: a curve the braking must already start for, beyond the camera, needs a
+    # measurement as much as one inside it (docs/decisions/0101). Off: the grid only.
+    beyond_camera: bool = True
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
-            if f.name == "enabled":
+            if f.name in ("enabled", "beyond_camera"):
+                if not isinstance(value, bool):
+                    raise ValueError(f"probing.{f.name} must be true or false, got {value!r}")
                 continue
             if isinstance(value, bool) or not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"probing.{f.name} must be a finite number > 0, got {value!r}")

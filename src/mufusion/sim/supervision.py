@@ -8,7 +8,9 @@ supervisory behaviours break the lock; both are logged as events and as control 
 
 **Active friction probing** (:class:`Prober`). On a straight, with no obstacle near, when the
 local estimate is unavailable or stale, the posterior band ahead is wide (mean − μ̂ ≥
-``min_band``) and the road ahead at the current speed needs more friction than μ̂ grants, the loop
+``min_band``) and the road ahead at the current speed needs more friction than μ̂ grants (the
+estimate's grid and, with ``beyond_camera``, the road past it as far as the planner's horizon
+reaches, at the friction the estimate declares possible there: :class:`RoadBeyond`), the loop
 brakes briefly and boundedly (deceleration ramped to ``max_decel_mps2`` over ``ramp_s``, at most
 ``max_duration_s`` and ``max_speed_loss_mps``) so that the tires' utilisation passes the local
 estimator's threshold; it stops as soon as the local estimate is available. The speed lost is the
@@ -204,6 +206,17 @@ def plausible_estimate(estimate: FrictionEstimate) -> FrictionEstimate | None:
     return dataclasses.replace(estimate, mu_hat=np.clip(np.maximum(mu_hat, top), None, MU_HAT_MAX))
 
 
+@dataclasses.dataclass(frozen=True)
+class RoadBeyond:
+    """The road past the estimate's grid that the probe's trigger reads (arrays of one shape):
+    distances ahead of the vehicle [m], the road's curvature there [1/m] and the friction the
+    estimate declares possible there [-]."""
+
+    s_m: np.ndarray
+    curvature_1pm: np.ndarray
+    mu_hat: np.ndarray
+
+
 class ProbeEndReason(StrEnum):
     """Why a friction probe ended (the value opens the ``probe_end`` event's detail)."""
 
@@ -241,10 +254,12 @@ class Prober:
         estimate: FrictionEstimate,
         curvature_ahead_1pm: np.ndarray,
         obstacle_near: bool,
+        beyond: RoadBeyond | None = None,
     ) -> str | None:
         """Why a probe should start now (a text for the log), or None.
 
-        ``curvature_ahead_1pm`` is the road's curvature at the estimate's grid points.
+        ``curvature_ahead_1pm`` is the road's curvature at the estimate's grid points; ``beyond``
+        the road past them that the trigger reads too (None: the grid only).
         """
         cfg = self.settings
         if estimate.local_available:
@@ -263,6 +278,10 @@ class Prober:
         band = float(np.max(np.asarray(estimate.fused.mean, dtype=float) - mu_hat))
         if band < cfg.min_band:
             return None
+        if beyond is not None:
+            grid = np.concatenate([grid, beyond.s_m])
+            kappa = np.concatenate([kappa, np.abs(beyond.curvature_1pm)])
+            mu_hat = np.concatenate([mu_hat, beyond.mu_hat])
         needed = speed_mps**2 * kappa / GRAVITY_MPS2
         granted = self.utilization_factor * mu_hat
         short = needed - granted
