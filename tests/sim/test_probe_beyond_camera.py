@@ -37,7 +37,7 @@ def test_a_curve_past_the_grid_starts_a_probe_only_when_the_trigger_reads_past_i
     assert prober.reason_to_probe(0.0, 19.7, _estimate(), on_grid, obstacle_near=False) is None
     s = np.arange(51.0, 80.0)
     beyond = RoadBeyond(s, _curvature(s), np.full(s.shape, 0.1))
-    why = prober.reason_to_probe(0.0, 19.7, _estimate(), on_grid, False, beyond)
+    why = prober.reason_to_probe(0.0, 19.7, _estimate(), on_grid, False, lambda: beyond)
     # 19.7² / (64 · 9.81) = 0.62 needed at 68 m, 0.9 · 0.1 granted.
     assert why is not None and "68 m ahead needs μ 0.62" in why and "grants 0.09" in why
 

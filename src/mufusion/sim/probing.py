@@ -87,8 +87,9 @@ class Probing(Supervisor):
         s_ego = ctx.s_m
         near = any(o.s_m - s_ego < self.settings.clear_distance_m for o in ctx.obstacles)
         kappa = self.curvature(s_ego + self.grid_m)
-        why = self.prober.reason_to_probe(ctx.t_s, ctx.speed_mps, estimate, kappa, near,
-                                          self._beyond(s_ego, ctx.speed_mps, estimate))
+        why = self.prober.reason_to_probe(
+            ctx.t_s, ctx.speed_mps, estimate, kappa, near,
+            lambda: self._beyond(s_ego, ctx.speed_mps, estimate))
         if why is not None:
             self.prober.start(ctx.t_s, ctx.speed_mps)
             self._event(ctx.t_s, EventKind.PROBE_START, why)

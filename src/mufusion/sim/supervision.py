@@ -102,6 +102,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from enum import StrEnum
 
 import numpy as np
@@ -254,12 +255,13 @@ class Prober:
         estimate: FrictionEstimate,
         curvature_ahead_1pm: np.ndarray,
         obstacle_near: bool,
-        beyond: RoadBeyond | None = None,
+        beyond: Callable[[], RoadBeyond | None] | None = None,
     ) -> str | None:
         """Why a probe should start now (a text for the log), or None.
 
         ``curvature_ahead_1pm`` is the road's curvature at the estimate's grid points; ``beyond``
-        the road past them that the trigger reads too (None: the grid only).
+        gives the road past them that the trigger reads too (None: the grid only), called only
+        once every other condition holds (it reads the road: not at every planning step).
         """
         cfg = self.settings
         if estimate.local_available:
@@ -278,10 +280,11 @@ class Prober:
         band = float(np.max(np.asarray(estimate.fused.mean, dtype=float) - mu_hat))
         if band < cfg.min_band:
             return None
-        if beyond is not None:
-            grid = np.concatenate([grid, beyond.s_m])
-            kappa = np.concatenate([kappa, np.abs(beyond.curvature_1pm)])
-            mu_hat = np.concatenate([mu_hat, beyond.mu_hat])
+        road = None if beyond is None else beyond()
+        if road is not None:
+            grid = np.concatenate([grid, road.s_m])
+            kappa = np.concatenate([kappa, np.abs(road.curvature_1pm)])
+            mu_hat = np.concatenate([mu_hat, road.mu_hat])
         needed = speed_mps**2 * kappa / GRAVITY_MPS2
         granted = self.utilization_factor * mu_hat
         short = needed - granted
