@@ -14,14 +14,13 @@ from mufusion.cli_table import print_outcome_table
 from mufusion.reproduction import reproduction_specs
 from processes import child_environment, mufusion_command
 
-# F-safe into a μ 0.9 left turn 5 m ahead at 18 m/s: lane recovery's extra plans stop some QPs
-# early, which acados reports with printf ("SQP_RTI: QP solver returned error status 3 ...").
-# With the body's fit the reference asks for less in the arc and every QP solves (decision
-# 0097); without it, as here, the solver still speaks.
-NOISY_RUN = ["turn", "-c", "F-safe", "--set", "initial_speed_mps=18", "--set",
-             "friction.mu_turn=0.9", "--set", "turn.start_ahead_m=5", "--set",
-             "turn.direction=left", "--set", "turn.clothoid_m=5", "--set", "duration_s=3",
-             "--set", "planner.body_fit=false"]
+# F-safe, the truck at 21 m/s with an obstacle 15 m ahead on μ 0.8 (infeasible: it hits at about
+# 18 m/s): at the end its QPs stop early, which acados reports with printf ("SQP_RTI: QP solver
+# returned error status 3 ..."). The turn this test used before solves every QP since HPIPM's
+# SPEED_ABS mode (decision 0102).
+NOISY_RUN = ["popup", "-c", "F-safe", "--set", "vehicle=truck", "--set", "friction.mu=0.8",
+             "--set", "initial_speed_mps=21", "--set", "obstacle.distance_m=15",
+             "--set", "obstacle.lateral_offset_m=0.0"]
 
 
 def test_solver_messages_are_counted_and_logged_never_printed(tmp_path: Path) -> None:

@@ -60,7 +60,14 @@ def test_authors_turn_local_only_saturates_and_slides_into_the_opposing_lane(rep
     out, runs = reproduction
     l_run = runs[("turn-authors", "L")]
     assert l_run["entered_opposing_lane"] and l_run["max_force_excess"] > 0.5
-    assert not runs[("turn-authors", "P")]["left_lane"]
+    # P, planning on the camera's 0.3 where μ is 0.4, takes the arc inside its tires' limit.
+    # Whether a corner then crosses the line by a few centimetres in the weave that follows is
+    # decided by the QP's rounding, not by the physics: over ten numerically equivalent solver
+    # settings P's farthest corner ended 0.00-0.13 m beyond the line (docs/decisions/0102).
+    p_run = runs[("turn-authors", "P")]
+    assert p_run["max_force_excess"] == 0.0 and not p_run["spun"]
+    assert p_run["max_lane_excursion_m"] < 0.15
+    assert l_run["max_lane_excursion_m"] > 10 * 0.15  # L: metres into the opposing lane
     report = (out / "report.md").read_text()
     # The slide mechanism is read from L's log: its front tires saturated.
     section = report.split("### Why L leaves its lane in the turn, or why not")[1]

@@ -161,8 +161,11 @@ def test_nan_once_in_mu_hat_recovers_within_two_steps(faulty):
     assert all(p.mu_sanitized_stages == 0 for p in plans[4:])
 
 
-def _poisoned_run(reset_works: bool, robust_retry: bool = True) -> list:
-    inner = AcadosBackend(TRUCK, CONFIG, robust_retry=robust_retry)
+def _poisoned_run(reset_works: bool, robust_retry: bool = True,
+                  robust_solver_only: bool = False) -> list:
+    inner = AcadosBackend(TRUCK, CONFIG, robust_retry=robust_retry or robust_solver_only)
+    if robust_solver_only:  # the robust mode's generated solver as the backend's only one
+        inner._fast, inner._robust = inner._robust, None
     backend = FaultyBackend(inner, reset_works=reset_works)
     planner = TractionAdaptivePlanner(TRUCK, CONFIG, backend=backend)
     return _run(planner, 10, fault_at_step=lambda i: "poison" if i == 3 else "none",
@@ -178,11 +181,21 @@ def test_poisoned_solver_is_reinitialised_and_recovers_within_two_steps():
     assert all(p.ok for p in plans[4:]), [p.status for p in plans]
 
 
-def test_without_reinitialisation_the_solver_stays_poisoned():
+def test_without_reinitialisation_the_robust_mode_stays_poisoned():
     # The fault the reset fixes: after one NaN solve, acados' multipliers keep every later RTI
-    # step failing although the inputs are finite again (one solver, no retry).
-    plans = _poisoned_run(reset_works=False, robust_retry=False)
+    # step of a BALANCE-mode solver failing although the inputs are finite again (one solver,
+    # no retry). HPIPM's SPEED mode, the fast one before decision 0102, did the same.
+    plans = _poisoned_run(reset_works=False, robust_retry=False, robust_solver_only=True)
     assert not any(p.ok for p in plans[3:])
+
+
+def test_the_fast_mode_recovers_from_a_nan_solve_without_reinitialisation():
+    # SPEED_ABS (decision 0102) starts each QP afresh: the NaN solve fails, the next succeeds
+    # with the planner's reset disabled and no robust retry. The reset stays for the robust
+    # mode (above) and costs nothing here.
+    plans = _poisoned_run(reset_works=False, robust_retry=False)
+    assert not plans[3].ok and plans[3].status == 4
+    assert all(p.ok for p in plans[4:]), [p.status for p in plans]
 
 
 def test_the_robust_retry_resets_the_fast_solver_it_gave_up_on():

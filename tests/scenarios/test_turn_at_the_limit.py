@@ -14,10 +14,10 @@ pytestmark = pytest.mark.slow
 
 def test_gt_drives_a_feasible_turn_instead_of_stopping_for_failed_qps() -> None:
     # Truck, 14 m/s, μ 0.9, curve 40 m ahead: feasible without braking (the arc holds
-    # 14.9 m/s at the planner's 0.9 of μg). HPIPM's fast mode returned NaN on 11 planning
-    # steps here; five in a row started the minimal-risk stop on
-    # the straight, so GT "stayed in lane" by never reaching the curve. The robust retry
-    # solves those QPs.
+    # 14.9 m/s at the planner's 0.9 of μg). HPIPM's SPEED mode returned NaN on 11 planning
+    # steps here; five in a row started the minimal-risk stop on the straight, so GT "stayed
+    # in lane" by never reaching the curve. The robust retry solved those QPs; SPEED_ABS, the
+    # fast mode since decision 0102, solves them itself.
     cfg = load_scenario("turn", overrides=[
         "initial_speed_mps=14", "friction.mu_turn=0.9", "turn.start_ahead_m=40",
         "turn.direction=left", "turn.clothoid_m=0", "vehicle=truck",
@@ -25,9 +25,10 @@ def test_gt_drives_a_feasible_turn_instead_of_stopping_for_failed_qps() -> None:
     log = run_scenario(cfg, "GT")
     m = compute_metrics(log)
     assert m.feasibility == "feasible"
-    assert m.robust_qp_retries > 0  # the fast mode still fails here: the retry is exercised
-    # With the front force as a state both modes fail on an isolated step (the shifted plan is
-    # kept, as for any fallback); never the five in a row that start the stop.
+    assert m.robust_qp_retries == 0
+    # With the front force as a state SPEED and BALANCE both failed an isolated step here (the
+    # shifted plan was kept, as for any fallback); SPEED_ABS none. Never the five in a row that
+    # start the stop.
     assert m.fallbacks < 5 and not m.minimal_risk
     # And with plans the steering can follow, GT keeps its footprint in the lane here (it left
     # it by 8 cm when its plans reversed the front force from stage to stage).
