@@ -3,8 +3,10 @@
 Run: ``python benchmarks/planner.py``. A fusion-free closed loop (≥ 200 planning steps, N = 40) on
 a road with a curve and a friction drop; the plant is the planner's model under the first planned
 input (fine RK4). Per step we time constraint update + solve + read-out. Prints a JSON line with
-``median_step_ms``, ``p99_step_ms``, ``max_step_ms``, ``speedup_vs_dompc``; numbers go to
-docs/performance.md, section "## Planner".
+``median_step_ms``, ``p99_step_ms``, ``max_step_ms``, ``speedup_vs_dompc`` and, from acados' own
+statistics of the fast solver after each step, the median ``acados_solve_ms`` (the whole RTI
+iteration), ``acados_qp_ms`` and ``qp_iterations`` (where a QP setting's effect shows first,
+docs/decisions/0102); numbers go to docs/performance.md, section "## Planner".
 
 ``python benchmarks/planner.py --capture`` instead times our planner's step with the solver's
 output captured at the file-descriptor level (as every run does, ``mufusion.sim.solver_output``)
@@ -28,6 +30,7 @@ import warnings
 
 import numpy as np
 
+from mufusion.planner.acados_backend import AcadosBackend
 from mufusion.planner.ocp import (
     Param,
     PlannerConfig,
@@ -74,7 +77,12 @@ def plant_step(x, u, dt=0.1, substeps=10):
     return x
 
 
-def run_ours(config: PlannerConfig) -> np.ndarray:
+QP_STATS = {"acados_solve_ms": "time_tot", "acados_qp_ms": "time_qp", "qp_iterations": "qp_iter"}
+"""Result key → acados statistic, read after each planning step (times in s, scaled to ms)."""
+
+
+def run_ours(config: PlannerConfig, qp_stats: dict[str, list[float]] | None = None) -> np.ndarray:
+    """Step times [ms]; with ``qp_stats``, acados' statistics of each step appended to it."""
     planner = TractionAdaptivePlanner(TRUCK, config)
     x = np.array([0.0, 0.0, 0.0, 0.0, V_REF, 0.0])
     times = []
@@ -83,6 +91,12 @@ def run_ours(config: PlannerConfig) -> np.ndarray:
         plan = planner.step(x, 0.1 * i, curvature, mu_hat, [], "cruise", V_REF,
                             lane_d_min_m=LANE[0], lane_d_max_m=LANE[1])
         times.append(time.perf_counter() - start)
+        if qp_stats is not None and isinstance(planner.backend, AcadosBackend):  # untimed
+            fast = planner.backend.solvers()[0].solver
+            for key, field in QP_STATS.items():
+                value = float(np.ravel(fast.get_stats(field))[-1])
+                qp_stats.setdefault(key, []).append(value if key == "qp_iterations"
+                                                    else 1e3 * value)
         x = plant_step(x, plan.inputs[0])
     return 1e3 * np.array(times)
 
@@ -272,7 +286,8 @@ def main() -> None:
                           "torque_lag_p99_step_ms": round(float(np.percentile(on, 99)), 3),
                           "ratio": round(float(np.median(on) / np.median(off)), 2)}))
         return
-    ours = run_ours(config)
+    qp_stats: dict[str, list[float]] = {}
+    ours = run_ours(config, qp_stats)
     theirs = run_dompc(config)
     result = {
         "median_step_ms": round(float(np.median(ours)), 3),
@@ -281,6 +296,7 @@ def main() -> None:
         "dompc_median_step_ms": round(float(np.median(theirs)), 3),
         "dompc_p99_step_ms": round(float(np.percentile(theirs, 99)), 3),
         "speedup_vs_dompc": round(float(np.median(theirs) / np.median(ours)), 1),
+        **{key: round(float(np.median(values)), 3) for key, values in qp_stats.items()},
         "steps": STEPS,
         "dompc_steps": DOMPC_STEPS,
         "horizon_steps": config.horizon_steps,
