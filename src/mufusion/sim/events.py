@@ -33,6 +33,9 @@ class EventKind(StrEnum):
     EVASION_AT_UPPER_EDGE = "evasion_at_upper_edge"
     """Every evasion up to the estimates' central value hits the obstacle and one at the
     posterior's upper 95 % edge passes it: that one is driven."""
+    EVASION_AT_TIRES_LIMIT = "evasion_at_tires_limit"
+    """Without a posterior: every evasion with μ̂ hits the obstacle and one at the tires' limit
+    (μ̂ / λ) passes it: that one is driven."""
     STOP_PROBE = "stop_probe"
     """A braking probe for a stop in lane started."""
     STOP_PROBE_END = "stop_probe_end"

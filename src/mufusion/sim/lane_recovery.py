@@ -18,6 +18,7 @@ from mufusion.sim.components import Planner, PlanningMode
 from mufusion.sim.events import EventKind, EventSink
 from mufusion.sim.settings import LaneRecoverySettings
 from mufusion.sim.supervision import (
+    at_tires_limit,
     planned_footprint_violation_m,
     planned_obstacle_clearance_m,
     planned_obstacle_hit,
@@ -53,6 +54,9 @@ class RecoveryOutcome(StrEnum):
     UPPER_EDGE = "upper_edge"
     """Every candidate hits the obstacle and the evasion at the posterior's upper 95 % edge
     passes it: that one is adopted (an ``evasion_at_upper_edge`` event)."""
+    TIRES_LIMIT = "tires_limit"
+    """Without a posterior: every evasion with μ̂ hits the obstacle and the one at the tires'
+    limit passes it: that one is adopted (an ``evasion_at_tires_limit`` event)."""
 
 
 @dataclass(frozen=True)
@@ -98,8 +102,12 @@ class LaneRecovery(Supervisor):
         curvature: Callable[[np.ndarray], np.ndarray],
         event: EventSink,
         obstacle_margin_m: float = 0.0,
+        utilization_factor: float = 1.0,
     ) -> None:
         self.settings = settings
+        self.utilization_factor = utilization_factor
+        """The planner's λ: the share of μ̂ its polygons use; the futility check may spend the
+        rest (``evade_at_tires_limit``)."""
         self.obstacle_margin_m = obstacle_margin_m
         self.planner = planner
         self.params = params
@@ -161,9 +169,7 @@ class LaneRecovery(Supervisor):
         if self._relaxed(estimate, 1.0) is None:
             self.alpha = 0.0
             if futile:
-                edge = plausible_estimate(estimate)
-                decided = self._when_every_evasion_hits(
-                    ctx, estimate, estimate if edge is None else edge, held=0.0)
+                decided = self._when_every_evasion_hits(ctx, estimate, held=0.0)
                 if decided is not None:
                     return decided
             return plan, estimate
@@ -263,8 +269,7 @@ class LaneRecovery(Supervisor):
         (every_one_hits, *_), violation, plan, adopted, alpha, memory = best
         self.planner.restore(memory)
         if mode == "evade" and every_one_hits and self.settings.brake_when_futile:
-            decided = self._when_every_evasion_hits(ctx, estimate, plausible_estimate(estimate),
-                                                    held)
+            decided = self._when_every_evasion_hits(ctx, estimate, held)
             if decided is not None:
                 self.alpha = 0.0
                 return decided
@@ -285,25 +290,40 @@ class LaneRecovery(Supervisor):
         )
         return plan, adopted
 
+    def _most_friction(self, estimate: FrictionEstimate) -> tuple[FrictionEstimate, bool]:
+        """The most friction ``estimate`` allows, as the futility check plans with it, and
+        whether it has a posterior: the posterior's upper 95 % edge, or μ̂ itself without one;
+        with ``evade_at_tires_limit``, at the tires' limit (÷ λ, :func:`at_tires_limit`)."""
+        edge = plausible_estimate(estimate)
+        top = estimate if edge is None else edge
+        if self._spends_reserve:
+            top = at_tires_limit(top, self.utilization_factor)
+        return top, edge is not None
+
+    @property
+    def _spends_reserve(self) -> bool:
+        """Whether the futility check plans at the tires' limit (``evade_at_tires_limit`` and a
+        planner that keeps a reserve, λ < 1)."""
+        return self.settings.evade_at_tires_limit and self.utilization_factor < 1.0
+
     def _when_every_evasion_hits(
-        self, ctx: PlanningContext, estimate: FrictionEstimate, top: FrictionEstimate | None,
-        held: float,
+        self, ctx: PlanningContext, estimate: FrictionEstimate, held: float,
     ) -> tuple[Plan, FrictionEstimate] | None:
         """The plan to drive when every lane-recovery candidate is predicted to hit an obstacle,
         or None to continue the best candidate.
 
-        ``estimate`` is unrelaxed, ``top`` the most friction it allows (the posterior's upper
-        95 % edge, or μ̂ itself without a posterior). An evasion planned with ``top`` decides:
-        if it hits too, the stop in lane (``futile_evasion``); if it passes and ``top`` is more
-        than μ̂ (a posterior's edge), that evasion (``evasion_at_upper_edge``, with
-        ``evade_at_upper_edge``). None when either plan fails, or without a posterior when the
-        re-planned evasion passes.
+        ``estimate`` is unrelaxed. An evasion planned with the most friction it allows
+        (:meth:`_most_friction`) decides: if it hits too, the stop in lane
+        (``futile_evasion``); if it passes with more friction than μ̂, that evasion
+        (``evasion_at_upper_edge`` with a posterior, with ``evade_at_upper_edge``;
+        ``evasion_at_tires_limit`` without one). None when either plan fails, or when the
+        re-planned evasion passes with μ̂ itself.
         """
         memory = self.planner.memory
-        if top is None:
-            return None
+        top, posterior = self._most_friction(estimate)
         check = ctx.plan(top, "evade")
         gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params, check.dt_s)
+        limit_note = " and the tires' limit" if self._spends_reserve else ""
         if not check.fallback and gap < 0.0:
             brake = ctx.plan(estimate, "emergency")
             if not brake.fallback:
@@ -313,13 +333,24 @@ class LaneRecovery(Supervisor):
                     f"allows too ({gap:.2f} m); braking in lane")
                 self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, held))
                 return brake, estimate
-        elif not check.fallback and top is not estimate and self.settings.evade_at_upper_edge:
+        elif not check.fallback and self._spends_reserve and not posterior:
+            # The reserve the polygons keep for tracking is worth more in the lane next to the
+            # obstacle than in front of it: the slip control holds the tires at their limit, and
+            # braking in lane hits for certain (docs/decisions/0103).
+            self._event(
+                ctx.t_s, EventKind.EVASION_AT_TIRES_LIMIT,
+                f"every evasion at λ = {self.utilization_factor:.2f} of μ̂ hits the obstacle; "
+                f"evading at the tires' limit (all of μ̂), which passes it ({gap:.2f} m)")
+            self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.TIRES_LIMIT, 1.0, held))
+            return check, top
+        elif not check.fallback and posterior and self.settings.evade_at_upper_edge:
             # Nothing with less friction passes: the evasion the posterior allows is the one to
             # drive, not a candidate predicted to hit (docs/decisions/0086).
             self._event(
                 ctx.t_s, EventKind.EVASION_AT_UPPER_EDGE,
                 "every evasion up to the estimates' central value hits the obstacle; evading "
-                f"with μ̂ at the posterior's upper 95 % edge, which passes it ({gap:.2f} m)")
+                f"with μ̂ at the posterior's upper 95 % edge{limit_note}, which passes it "
+                f"({gap:.2f} m)")
             self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.UPPER_EDGE, 1.0, held))
             return check, top
         self.planner.restore(memory)

@@ -169,7 +169,8 @@ class ClosedLoop:
         self.supervision = Supervision(
             StopInLane(self.lane_recovery, event),
             LaneRecovery(self.lane_recovery, self.planner, self.params, self.lane_bounds_m,
-                         self.world.curvature, event, self.obstacle_response.margin_m),
+                         self.world.curvature, event, self.obstacle_response.margin_m,
+                         self.utilization_factor),
             Probing(self.probing, self.utilization_factor, self.planning_horizon_s, self.params,
                     grid, self.world.curvature, event),
             MinimalRisk(self.safety, self.params, event),

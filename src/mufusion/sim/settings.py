@@ -113,6 +113,10 @@ class LaneRecoverySettings:
     # Evading, when every candidate hits the obstacle and the plan at the posterior's upper
     # 95 % edge passes it: drive that plan, not a candidate predicted to hit (0086).
     evade_at_upper_edge: bool = True
+    # Evading, the futility check plans with the most friction the estimates allow at the tires'
+    # limit (μ̂ / λ): braking in lane hits for certain, and the reserve λ keeps for tracking is
+    # spent, as brake assist spends it on braking (docs/decisions/0103).
+    evade_at_tires_limit: bool = True
     # Evading, the candidate with the most relaxation is planned first: where it does no better
     # than the friction-limited plan the search ends there (one solve, not one per step); where
     # it does better the smaller ones follow in increasing order as before, and the smallest
@@ -138,6 +142,9 @@ class LaneRecoverySettings:
         if not isinstance(self.evade_at_upper_edge, bool):
             raise ValueError("lane_recovery.evade_at_upper_edge must be true or false, "
                              f"got {self.evade_at_upper_edge!r}")
+        if not isinstance(self.evade_at_tires_limit, bool):
+            raise ValueError("lane_recovery.evade_at_tires_limit must be true or false, "
+                             f"got {self.evade_at_tires_limit!r}")
         if not (math.isfinite(self.obstacle_margin_share)
                 and 0.0 <= self.obstacle_margin_share <= 1.0):
             raise ValueError(

@@ -90,7 +90,12 @@ with less friction is predicted to hit, and keeping one of them drove into the o
 band it may use (the road) that is predicted to hit is reviewed the same way, and so is one
 planned where μ̂ is already all the estimates guarantee (nothing to relax; the check still asks
 the posterior's upper edge, docs/decisions/0094); without a posterior (GT, L, P) the check
-re-plans the evasion with μ̂ itself and only its braking applies (docs/decisions/0062).
+re-plans the evasion with μ̂ itself (docs/decisions/0062). With ``evade_at_tires_limit`` the
+check plans at the tires' limit, its friction divided by the planner's utilisation factor λ
+(:func:`at_tires_limit`): braking in lane hits for certain, so the reserve λ keeps for tracking
+is spent on the evasion, as brake assist spends it on braking; without a posterior an evasion
+that passes only there is driven (``evasion_at_tires_limit``). GT had braked into an obstacle
+its evasion at λ missed by 2 cm (docs/decisions/0103).
 
 The loop runs them as its supervisors (:class:`~mufusion.sim.supervisor.Supervisor`):
 :class:`~mufusion.sim.stop_in_lane.StopInLane`, :class:`~mufusion.sim.lane_recovery.LaneRecovery`
@@ -205,6 +210,26 @@ def plausible_estimate(estimate: FrictionEstimate) -> FrictionEstimate | None:
     top = np.asarray(fused.mean, dtype=float) + Z95 * np.asarray(fused.std, dtype=float)
     mu_hat = np.asarray(estimate.mu_hat, dtype=float)
     return dataclasses.replace(estimate, mu_hat=np.clip(np.maximum(mu_hat, top), None, MU_HAT_MAX))
+
+
+def at_tires_limit(estimate: FrictionEstimate, utilization_factor: float) -> FrictionEstimate:
+    """μ̂ divided by the planner's utilisation factor λ (at most ``MU_HAT_MAX``): a plan with it
+    puts its polygons at the whole of μ̂, not at the share λ that keeps a reserve for tracking.
+
+    Not an estimate to plan with in general: the friction a manoeuvre may spend when the only
+    alternative is a collision, as brake assist spends the reserve on braking (the
+    futile-evasion check, docs/decisions/0103).
+
+    Examples
+    --------
+    >>> est = FrictionEstimate(np.array([0.0, 10.0]), np.array([0.45, 1.9]), False, None)
+    >>> at_tires_limit(est, 0.9).mu_hat.tolist()
+    [0.5, 2.0]
+    """
+    if not 0.0 < utilization_factor <= 1.0:
+        raise ValueError(f"utilization_factor must be in (0, 1], got {utilization_factor!r}")
+    mu_hat = np.asarray(estimate.mu_hat, dtype=float) / utilization_factor
+    return dataclasses.replace(estimate, mu_hat=np.minimum(mu_hat, MU_HAT_MAX))
 
 
 @dataclasses.dataclass(frozen=True)
