@@ -323,7 +323,6 @@ class LaneRecovery(Supervisor):
         top, posterior = self._most_friction(estimate)
         check = ctx.plan(top, "evade")
         gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params, check.dt_s)
-        limit_note = " and the tires' limit" if self._spends_reserve else ""
         if not check.fallback and gap < 0.0:
             brake = ctx.plan(estimate, "emergency")
             if not brake.fallback:
@@ -333,25 +332,24 @@ class LaneRecovery(Supervisor):
                     f"allows too ({gap:.2f} m); braking in lane")
                 self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.BRAKING, 0.0, held))
                 return brake, estimate
-        elif not check.fallback and self._spends_reserve and not posterior:
-            # The reserve the polygons keep for tracking is worth more in the lane next to the
-            # obstacle than in front of it: the slip control holds the tires at their limit, and
-            # braking in lane hits for certain (docs/decisions/0103).
-            self._event(
-                ctx.t_s, EventKind.EVASION_AT_TIRES_LIMIT,
-                f"every evasion at λ = {self.utilization_factor:.2f} of μ̂ hits the obstacle; "
-                f"evading at the tires' limit (all of μ̂), which passes it ({gap:.2f} m)")
-            self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.TIRES_LIMIT, 1.0, held))
-            return check, top
-        elif not check.fallback and posterior and self.settings.evade_at_upper_edge:
-            # Nothing with less friction passes: the evasion the posterior allows is the one to
-            # drive, not a candidate predicted to hit (docs/decisions/0086).
-            self._event(
-                ctx.t_s, EventKind.EVASION_AT_UPPER_EDGE,
-                "every evasion up to the estimates' central value hits the obstacle; evading "
-                f"with μ̂ at the posterior's upper 95 % edge{limit_note}, which passes it "
-                f"({gap:.2f} m)")
-            self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.UPPER_EDGE, 1.0, held))
+        elif not check.fallback and (self.settings.evade_at_upper_edge if posterior
+                                     else self._spends_reserve):
+            if posterior:
+                # Nothing with less friction passes: the evasion the posterior allows is the one
+                # to drive, not a candidate predicted to hit (docs/decisions/0086).
+                kind, outcome = EventKind.EVASION_AT_UPPER_EDGE, RecoveryOutcome.UPPER_EDGE
+                limit = " and the tires' limit" if self._spends_reserve else ""
+                detail = ("every evasion up to the estimates' central value hits the obstacle; "
+                          f"evading with μ̂ at the posterior's upper 95 % edge{limit}")
+            else:
+                # The reserve the polygons keep for tracking is worth more in the lane next to
+                # the obstacle than in front of it: the slip control holds the tires at their
+                # limit, and braking in lane hits for certain (docs/decisions/0103).
+                kind, outcome = EventKind.EVASION_AT_TIRES_LIMIT, RecoveryOutcome.TIRES_LIMIT
+                detail = (f"every evasion at λ = {self.utilization_factor:.2f} of μ̂ hits the "
+                          "obstacle; evading at the tires' limit (all of μ̂)")
+            self._event(ctx.t_s, kind, f"{detail}, which passes it ({gap:.2f} m)")
+            self.recoveries.append(Recovery(ctx.t_s, outcome, 1.0, held))
             return check, top
         self.planner.restore(memory)
         return None
