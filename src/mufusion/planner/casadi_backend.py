@@ -35,6 +35,7 @@ from mufusion.planner.ocp_state import (
     tire_forces,
 )
 from mufusion.planner.penalties import corridor_slack_scale
+from mufusion.planner.stability import state_bounds
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import N_INPUTS, N_STATES, Input, State, frenet_bicycle_dynamics
 
@@ -51,7 +52,8 @@ class CasadiBackend:
         n, ns, dt = config.horizon_steps, config.polygon_sides, config.dt_s
         rows = polygon_rows(ns, load_transfer=config.load_transfer)
         nh = HEADING_ROWS * int(config.heading_rows)
-        pen = slack_penalties(config.weights, rows.per_axle, nh, config.speed_ceiling)
+        ne = 2 * int(config.stability_envelope)  # soft ψ̇ and v_y bounds, stages 1..N-1
+        pen = slack_penalties(config.weights, rows.per_axle, nh, config.speed_ceiling, ne)
         lead = corridor_slack_scale(n, config.lane_slack_lead)
         nv = (n - 1) * int(config.speed_ceiling)  # soft v_x bounds, stages 1..N-1 (as acados)
         layout = ocp_state(config, params)
@@ -97,6 +99,8 @@ class CasadiBackend:
         S_ru = ca.SX.sym("S_ru", rows.per_axle, n)
         S_hl = ca.SX.sym("S_hl", nh, n)  # heading rows' slacks, likewise
         S_hu = ca.SX.sym("S_hu", nh, n)
+        S_el = ca.SX.sym("S_el", ne, n - 1)  # the stability envelope's slacks, stages 1..N-1
+        S_eu = ca.SX.sym("S_eu", ne, n - 1)
         P = ca.SX.sym("P", N_PARAMS, n)
         YREF = ca.SX.sym("YREF", ny, n + 1)
         WD = ca.SX.sym("WD", ny)
@@ -105,11 +109,14 @@ class CasadiBackend:
         DHI = ca.SX.sym("DHI", n)
         VLO = ca.SX.sym("VLO", nv)
         VHI = ca.SX.sym("VHI", nv)
+        ELO = ca.SX.sym("ELO", ne, n - 1)  # the envelope's bounds on (ψ̇, v_y), stages 1..N-1
+        EHI = ca.SX.sym("EHI", ne, n - 1)
 
         def slack_cost(s, linear, quadratic):
             return ca.sum1(ca.DM(linear) * s + 0.5 * ca.DM(quadratic) * s**2)
 
         corridor, speed, rear, heading = pen.corridor, pen.speed, pen.rear_polygon, pen.heading
+        envelope = pen.envelope
         cost: Any = 0
         g, lbg, ubg = [X[:, 0] - X0], [0.0] * nx, [0.0] * nx
         for k in range(n):
@@ -160,6 +167,16 @@ class CasadiBackend:
                       X[State.vx, k + 1] - S_vhi[k] - VHI[k]]
                 lbg += [0.0, -np.inf]
                 ubg += [np.inf, 0.0]
+            if ne and k < n - 1:  # ψ̇ and v_y at stage k+1, soft as in the acados description
+                xe = ca.vertcat(X[State.psidot, k + 1], X[State.vy, k + 1])
+                cost += dt * (
+                    slack_cost(S_el[:, k], pen.linear_stage[envelope],
+                               pen.quadratic_stage[envelope])
+                    + slack_cost(S_eu[:, k], pen.linear_stage_upper[envelope],
+                                 pen.quadratic_stage_upper[envelope]))
+                g += [xe + S_el[:, k] - ELO[:, k], xe - S_eu[:, k] - EHI[:, k]]
+                lbg += [0.0] * ne + [-np.inf] * ne
+                ubg += [np.inf] * ne + [0.0] * ne
         r_e = X[:N_STATES, n] - YREF[:N_STATES, n]
         cost += 0.5 * ca.sum1(WD[:N_STATES] * r_e**2)
 
@@ -167,8 +184,9 @@ class CasadiBackend:
         self._n_x = nx * (n + 1)
         self._n_u = N_INPUTS * n
         z = ca.vertcat(ca.vec(X), ca.vec(U), S_lo, S_hi, S_vlo, S_vhi, ca.vec(S_rl),
-                       ca.vec(S_ru), ca.vec(S_hl), ca.vec(S_hu))
-        par = ca.vertcat(ca.vec(P), ca.vec(YREF), WD, X0, DLO, DHI, VLO, VHI)
+                       ca.vec(S_ru), ca.vec(S_hl), ca.vec(S_hu), ca.vec(S_el), ca.vec(S_eu))
+        par = ca.vertcat(ca.vec(P), ca.vec(YREF), WD, X0, DLO, DHI, VLO, VHI, ca.vec(ELO),
+                         ca.vec(EHI))
         self._lbg, self._ubg = np.array(lbg), np.array(ubg)
         self._n_z = z.shape[0]
         self._solver = ca.nlpsol(
@@ -182,7 +200,7 @@ class CasadiBackend:
         lbu = np.tile([-rate, lower[0], lower[1]], (n, 1))
         ubu = np.tile([rate, upper[0], upper[1]], (n, 1))
         self._lbu, self._ubu = lbu, ubu
-        self._n_slack = 2 * n + 2 * nv + 2 * (rows.per_axle + nh) * n
+        self._n_slack = 2 * n + 2 * nv + 2 * (rows.per_axle + nh) * n + 2 * ne * (n - 1)
         self._soft_speed = bool(nv)
 
     def solve(self, x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi, min_speed_mps,
@@ -196,6 +214,7 @@ class CasadiBackend:
         if max_front_brake_force_n is not None:
             brake = np.asarray(max_front_brake_force_n, dtype=float)
             lbu[:, Input.fxf] = np.maximum(lbu[:, Input.fxf], -brake)
+        guess_planner_x = guess_x  # the envelope's speeds: the planner's own states
         if self._layout.augmented:
             x0, guess_x, guess_u = augmented_problem(
                 x0, guess_x, guess_u, p, self.params, self.config, self._layout)
@@ -212,7 +231,14 @@ class CasadiBackend:
         ubz = np.concatenate([ubx_x.ravel(), ubu.ravel(), np.full(self._n_slack, np.inf)])
         z0 = np.concatenate([guess_x.ravel(), guess_u.ravel(), np.zeros(self._n_slack)])
         soft = (np.full(n - 1, min_speed_mps), v_hi) if self._soft_speed else ()
-        par = np.concatenate([p.ravel(), yref.ravel(), weights, x0, d_lo, d_hi, *soft])
+        envelope = ()
+        if self.config.stability_envelope:
+            # Stages 1..N-1 of the bounds the acados backend writes (planner/stability.py), in
+            # the order ca.vec lays out ELO and EHI (ne, N-1): stage by stage.
+            lo, hi = state_bounds(d_lo, d_hi, min_speed_mps, guess_planner_x, p, self.config)
+            envelope = (lo[: n - 1, 2:].ravel(), hi[: n - 1, 2:].ravel())
+        par = np.concatenate([p.ravel(), yref.ravel(), weights, x0, d_lo, d_hi, *soft,
+                              *envelope])
         sol = self._solver(x0=z0, p=par, lbx=lbz, ubx=ubz, lbg=self._lbg, ubg=self._ubg)
         ok = bool(self._solver.stats()["success"])
         z = np.asarray(sol["x"]).ravel()

@@ -184,7 +184,7 @@ class PlannerConfig:
     # stage's start to one torque lag later, where it is below the stage's (docs/decisions/0064).
     axle_friction: bool = True
     # Each stage's yaw rate bounded (soft) by μ̂ g / v at the guess's speed, with a margin
-    # and body slip by 0.02 μ̂ g (planner/stability.py; issue 38, mechanism B; acados only;
+    # and body slip by 0.02 μ̂ g (planner/stability.py; issue 38, mechanism B; both backends;
     # on: GT 0.28-0.30 m out there where main is 0.33-0.39 m, docs/decisions/0065).
     stability_envelope: bool = False
     # Keep the body's ends in the lane at the plan's own heading error (four soft rows per stage

@@ -19,7 +19,7 @@ class SlackPenalties:
     the minimum speed, priced as the corridor; the upper side the ceiling, priced lower,
     ``CostWeights.speed_ceiling_l1/l2``; without the ceiling the speed's bounds are hard and
     have no slack), the stability envelope's ψ̇ and v_y if the OCP has it (priced as the
-    corridor; acados only), then the rear polygon's rows (:func:`polygon_rows`), then the
+    corridor), then the rear polygon's rows (:func:`polygon_rows`), then the
     heading rows if the OCP has them
     (``PlannerConfig.heading_rows``); at the terminal stage N: the corridor bound only. The
     penalty of a slack ``σ ≥ 0`` is ``linear σ + quadratic σ² / 2``; acados multiplies stage

@@ -1,6 +1,6 @@
 """The stability envelope: per-stage bounds on the planned yaw rate and body slip from μ̂.
 
-Issue 38, mechanism B (``PlannerConfig.stability_envelope``, acados backend). A yaw rate above
+Issue 38, mechanism B (``PlannerConfig.stability_envelope``, both backends). A yaw rate above
 what the lateral friction sustains at the speed, ``|ψ̇| ≤ μ g / v`` (a steady turn at the
 friction limit), or a body slip above ``tan β_max = 0.02 μ g`` runs the rear axle at its limit;
 production yaw-stability control bounds its references by the same two expressions (Rajamani,
