@@ -122,6 +122,29 @@ def test_a_broken_friction_source_is_sanitised_not_raised():
     assert scalar.last_count == 0
 
 
+def test_the_sanitised_count_is_the_stages_not_the_front_axles_reach():
+    """``Plan.mu_sanitized_stages`` reads the count of the step's last μ̂ query; the stage
+    parameters make the stages' own query last, after the front axle's reach (0064)."""
+    from mufusion.planner.ocp import stage_parameters
+
+    def nan_beyond_20_m(s):
+        return np.where(np.asarray(s, dtype=float) > 20.0, np.nan, 0.8)
+
+    n = CONFIG.horizon_steps
+    guess_x = np.zeros((n + 1, 6))
+    guess_x[:, State.vx] = 15.0
+    guess_x[:, State.s] = np.arange(n + 1.0)  # stages at 0, 1, ..., 39 m
+    wrapped = SanitizedFriction(nan_beyond_20_m, None, 0.1)
+    stage = stage_parameters(guess_x, np.zeros((n, 3)), straight, wrapped, TRUCK,
+                             CONFIG.utilization_factor, None, TRUCK.torque_time_constant_s)
+    s_k = guess_x[:-1, State.s]
+    # The front axle (1.2 m ahead) and its reach meet the patch stages earlier: more values.
+    ahead = s_k + TRUCK.cog_to_front_axle_m
+    assert np.count_nonzero(ahead > 20.0) > np.count_nonzero(s_k > 20.0) == 19
+    assert wrapped.last_count == 19
+    np.testing.assert_allclose(stage.mu_hat, np.where(s_k > 20.0, 0.1, 0.8))
+
+
 def test_planner_reports_and_applies_the_sanitisation(faulty):
     planner, _ = faulty
     planner.reset()

@@ -137,11 +137,15 @@ def stage_parameters(
     """
     s_k = guess_states[:-1, State.s]
     fzf, fzr = axle_loads_n(guess_inputs, params)
-    mu = mu_brake = _clipped_mu(mu_hat_of_s(s_k))
+    axle = None
     if axle_lag_s is not None:
         reach = np.maximum(guess_states[:-1, State.vx], 0.0) * axle_lag_s
-        mu_brake = np.minimum(
-            mu, axle_friction(mu_hat_of_s, s_k + params.cog_to_front_axle_m, reach))
+        axle = axle_friction(mu_hat_of_s, s_k + params.cog_to_front_axle_m, reach)
+    # The stages' own query last: a sanitising μ̂ (planner/safeguards.py) counts the values it
+    # replaced in its latest query, and the plan reports that count for its stages.
+    mu = mu_brake = _clipped_mu(mu_hat_of_s(s_k))
+    if axle is not None:
+        mu_brake = np.minimum(mu, axle)
     kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
     c_r = rear_cornering_stiffness_n_per_rad(
         params, fzr, utilization_factor, mu_hat=mu, table=stiffness_table
