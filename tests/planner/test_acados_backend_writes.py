@@ -167,3 +167,31 @@ def test_each_acados_install_gets_its_own_solvers(monkeypatch):
     assert acados_backend.problem_hash(TRUCK, CONFIG) == first
     monkeypatch.setenv("ACADOS_SOURCE_DIR", "/venv-b/lib/python3.11/site-packages/acados")
     assert acados_backend.problem_hash(TRUCK, CONFIG) != first
+
+
+def test_an_edit_to_the_code_that_describes_the_problem_regenerates_the_solver(
+        tmp_path, monkeypatch):
+    """The hash covers the source of the problem's description and of every module it imports:
+    an edit there (a constraint row, a solver option) must not load a solver generated from the
+    code before it, which a manual format version missed once."""
+    package = tmp_path / "mufusion_probe"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "describe.py").write_text("from mufusion_probe.rows import ROWS\n")
+    (package / "rows.py").write_text("ROWS = 3\n")
+    (package / "unrelated.py").write_text("X = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    digest = acados_backend.generator_source_digest.__wrapped__  # uncached
+    before = digest("mufusion_probe.describe")
+    assert digest("mufusion_probe.describe") == before
+    (package / "unrelated.py").write_text("X = 2\n")  # not imported by the description
+    assert digest("mufusion_probe.describe") == before
+    (package / "rows.py").write_text("ROWS = 4\n")  # imported: its edit is seen
+    assert digest("mufusion_probe.describe") != before
+    # The product's own description reaches the dynamics and the polygons' rows.
+    modules = acados_backend.generator_modules()
+    assert {"mufusion.planner.acados_ocp", "mufusion.vehicle.planner_model",
+            "mufusion.planner.ocp", "mufusion.planner.penalties"} <= modules
+    base = acados_backend.problem_hash(TRUCK, CONFIG)
+    monkeypatch.setattr(acados_backend, "generator_source_digest", lambda: "an edited description")
+    assert acados_backend.problem_hash(TRUCK, CONFIG) != base

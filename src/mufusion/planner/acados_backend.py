@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import ast
 import contextlib
+import functools
 import hashlib
 import io
 import json
 import logging
 import os
-from importlib import resources
+from importlib import resources, util
+from pathlib import Path
 from types import ModuleType
 
 import numpy as np
@@ -89,10 +92,54 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             # and one whose install is gone is never loaded (it failed to load, and the planner
             # fell back to CasADi).
             "acados_install": os.environ.get("ACADOS_SOURCE_DIR", ""),
+            # The code that describes the problem: an edit to it regenerates the solvers, where
+            # the format version alone relied on a bump that a cached solver outlived.
+            "generator": generator_source_digest(),
         },
         sort_keys=True,
     )
     return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _generator_sources(root: str) -> dict[str, str]:
+    """The source text of module ``root`` and of every ``mufusion`` module it imports,
+    transitively (found in the text, not by importing), by module name."""
+    sources: dict[str, str] = {}
+    pending = [root]
+    while pending:
+        name = pending.pop()
+        if name in sources:
+            continue
+        spec = util.find_spec(name)
+        if spec is None or spec.origin is None:
+            raise ModuleNotFoundError(f"{name}: imported by the solver's description")
+        text = Path(spec.origin).read_text(encoding="utf-8")
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("mufusion"):
+                pending.append(str(node.module))
+            elif isinstance(node, ast.Import):
+                pending.extend(a.name for a in node.names if a.name.startswith("mufusion"))
+        sources[name] = text
+    return sources
+
+
+_DESCRIPTION = "mufusion.planner.acados_ocp"
+
+
+def generator_modules(root: str = _DESCRIPTION) -> set[str]:
+    """The modules whose source :func:`generator_source_digest` covers."""
+    return set(_generator_sources(root))
+
+
+@functools.cache
+def generator_source_digest(root: str = _DESCRIPTION) -> str:
+    """Hash of the code that writes the generated problem: the source of ``root`` (the OCP's
+    description) and of every ``mufusion`` module it imports."""
+    sources = _generator_sources(root)
+    digest = hashlib.sha256()
+    for name in sorted(sources):
+        digest.update(f"{name}\0{sources[name]}\0".encode())
+    return digest.hexdigest()
 
 
 class _GeneratedSolver:
