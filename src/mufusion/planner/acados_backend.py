@@ -222,7 +222,7 @@ class _GeneratedSolver:
             _WRITE, x0, p[:n], p[n - 1], yref[:n], yref[n, :N_STATES],
             np.broadcast_to(w_stage.ravel(order="F"), (n, w_stage.size)),
             w_stage[:N_STATES, :N_STATES].ravel(order="F"),
-            np.broadcast_to(ubu, (n, ubu.size)), [float(write_lbu)], lbu,
+            np.broadcast_to(ubu, (n, ubu.shape[-1])), [float(write_lbu)], lbu,
             lbx[:-1], lbx[-1, :1], ubx[:-1], ubx[-1, :1],
         )
         data = np.concatenate([np.ravel(part) for part in (*problem, guess_x, guess_u)])
@@ -292,20 +292,24 @@ class AcadosBackend:
         d_lo: np.ndarray,
         d_hi: np.ndarray,
         min_speed_mps: float,
-        max_drive_force_n: float | None = None,
+        max_drive_force_n: float | np.ndarray | None = None,
         max_front_brake_force_n: np.ndarray | None = None,
         max_speed_mps: np.ndarray | None = None,
     ) -> tuple[int, np.ndarray, np.ndarray]:
         """One RTI step; returns ``(status, states (N+1, 6), inputs (N, 3))``.
 
-        ``max_drive_force_n`` lowers the rear drive-force bound for this solve (``None``: the
-        actuator's bound); ``max_front_brake_force_n`` ``(N,)`` [N, ≥ 0, ``inf``: none] raises
-        the front braking's bound per stage; ``max_speed_mps`` ``(N,)`` [m/s] is the soft speed
+        ``max_drive_force_n`` lowers the rear drive-force bound for this solve, one for every
+        stage or ``(N,)`` one per stage (``None``: the actuator's bound);
+        ``max_front_brake_force_n`` ``(N,)`` [N, ≥ 0, ``inf``: none] raises the front braking's
+        bound per stage; ``max_speed_mps`` ``(N,)`` [m/s] is the soft speed
         ceiling of stages 1 … N (``None``: none)."""
         n = self.config.horizon_steps
         ubu = self._ubu.copy()
-        if max_drive_force_n is not None:
-            ubu[-1] = min(ubu[-1], max_drive_force_n)
+        if isinstance(max_drive_force_n, np.ndarray):  # one bound per stage
+            ubu = np.tile(self._ubu, (n, 1))
+            ubu[:, -1] = np.minimum(ubu[:, -1], max_drive_force_n)
+        elif max_drive_force_n is not None:
+            ubu[-1] = min(ubu[-1], float(max_drive_force_n))
         lbu = np.tile(self._lbu, (n, 1))
         if max_front_brake_force_n is not None:
             # F_xf is the second-last bounded input (F_xr last, see input_bounds).

@@ -41,7 +41,7 @@ class PlannerBackend(Protocol):
         d_lo: np.ndarray,
         d_hi: np.ndarray,
         min_speed_mps: float,
-        max_drive_force_n: float | None = None,
+        max_drive_force_n: float | np.ndarray | None = None,
         max_front_brake_force_n: np.ndarray | None = None,
         max_speed_mps: np.ndarray | None = None,
     ) -> tuple[int, np.ndarray, np.ndarray]: ...

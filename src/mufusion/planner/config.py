@@ -163,6 +163,10 @@ class PlannerConfig:
     # The reference regains speed from the vehicle's own no faster than the cruise traction cap
     # on the g-g ellipse allows (planner/speed_profile.py, ``regain_limited_profile_mps``).
     reference_regain_limit: bool = True
+    # In cruise, no rear drive at a stage whose guessed speed is above the curve speed
+    # reference by more than 0.5 m/s (planner/drive_cap.py): a plan above the reference may not
+    # drive now and brake at the friction limit later (docs/decisions/0105).
+    reference_drive_cap: bool = True
     # In cruise, the speed reference (``curve_speed_reference``) also a soft upper bound on each
     # stage's planned speed (planner/speed_ceiling.py): tracked only in a least-squares sense,
     # plans rise above its braking ramps for their first stages and catch up at the friction

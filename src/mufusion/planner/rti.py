@@ -19,6 +19,7 @@ import numpy as np
 from mufusion.planner.backend import PlannerBackend
 from mufusion.planner.body_fit import body_fit_cap, body_fitted_curvature
 from mufusion.planner.config import PlannerConfig, PlannerMode, PlannerObstacle
+from mufusion.planner.drive_cap import drive_caps_n
 from mufusion.planner.minimal_risk import minimal_risk_rollout
 from mufusion.planner.ocp import (
     axle_loads_n,
@@ -192,11 +193,7 @@ def iterate(
             status, xs, us = backend.solve(
                 x0, guess_x, guess_u, p, yref, weights, d_lo, d_hi,
                 0.0 if braking else cfg.min_speed_mps,
-                # No traction while evading or stopping: the rear tires' friction is kept
-                # for lateral force and braking. In cruise, traction is capped at a heavy
-                # vehicle's acceleration, not at the friction limit: regaining speed at the
-                # limit after an evasion leaves the driven axle no lateral reserve.
-                par.mass_kg * cfg.max_cruise_accel_mps2 if mode == "cruise" else 0.0,
+                _drive_cap_n(par, cfg, mode, guess_x, speed_ref),
                 stage.front_brake_limit_n,
                 ceiling,
             )
@@ -214,6 +211,23 @@ def iterate(
         if reason is not FallbackReason.NONE:
             break
     return Iterated(xs, us, guess_x, guess_u, stage, status, reason, retried, soft_only)
+
+
+def _drive_cap_n(par: VehicleParams, cfg: PlannerConfig, mode: PlannerMode,
+                 guess_x: np.ndarray, speed_ref: float | np.ndarray) -> float | np.ndarray:
+    """The rear drive's bound for one solve: per stage, or one for all stages."""
+    # No traction while evading or stopping: the rear tires' friction is kept for lateral
+    # force and braking. In cruise, traction is capped at a heavy vehicle's acceleration, not at
+    # the friction limit: regaining speed at the limit after an evasion leaves the driven axle
+    # no lateral reserve; and none at stages above the curve speed reference (planner/
+    # drive_cap.py, docs/decisions/0105).
+    if mode != "cruise":
+        return 0.0
+    cap = par.mass_kg * cfg.max_cruise_accel_mps2
+    if not cfg.reference_drive_cap or np.ndim(speed_ref) == 0:
+        return cap
+    n = cfg.horizon_steps
+    return drive_caps_n(guess_x[:n, State.vx], np.asarray(speed_ref)[:n], cap)
 
 
 def plan_of(

@@ -207,6 +207,11 @@ class PlannerSettings(_Strict):
     """In cruise, the speed reference regains speed from the vehicle's own no faster than the
     drive's acceleration cap on the g-g ellipse allows (less while cornering); ``false``: the
     reference jumps back to the profile's speed."""
+    reference_drive_cap: bool = PlannerConfig.reference_drive_cap
+    """In cruise, no rear drive at a stage whose guessed speed is above the speed reference by
+    more than 0.5 m/s, so a plan above the reference cannot drive now and put its braking off
+    (:mod:`mufusion.planner.drive_cap`, docs/decisions/0105); ``false``: the drive's cap at
+    every stage."""
     steering_rate_limit: bool = True
     """Plan the front lateral force as a state whose rate the steering actuator's rate limit
     bounds (:mod:`mufusion.planner.front_force`); ``false``: the forces are free inputs, as in
