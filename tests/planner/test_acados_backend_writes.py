@@ -35,13 +35,14 @@ def _solve_through_the_wrapper(self, x0, guess_x, guess_u, p, yref, weights, lbx
     s.set(0, "lbx", x0)
     s.set(0, "ubx", x0)
     w_stage = np.diag(weights[: N_STATES + N_INPUTS])
+    ubu = np.broadcast_to(ubu, (n, ubu.shape[-1]))  # one bound for all stages, or per stage
     for k in range(n):
         s.set(k, "x", guess_x[k])
         s.set(k, "u", guess_u[k])
         s.set(k, "p", p[k])
         s.cost_set(k, "yref", yref[k])
         s.cost_set(k, "W", w_stage)
-        s.constraints_set(k, "ubu", ubu)
+        s.constraints_set(k, "ubu", ubu[k])
         if write_lbu:
             s.constraints_set(k, "lbu", lbu[k])
         if k > 0:

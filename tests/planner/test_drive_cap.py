@@ -1,4 +1,5 @@
-"""No drive above the speed reference (``PlannerConfig.reference_drive_cap``, docs/decisions/0105):
+"""No drive above the speed reference (``PlannerConfig.reference_drive_cap``, off by default:
+measured, not adopted, docs/decisions/0105):
 the rear drive's bound per stage, written per solve by both backends and passed by the
 real-time iteration in cruise only; and the edge draw's truck that spun without it."""
 
@@ -132,7 +133,7 @@ def test_the_edge_draws_truck_brakes_for_the_drop_inside_the_arc_instead_of_driv
         "vehicle=truck", "turn.radius_m=106", "turn.angle_rad=2.15", "turn.clothoid_m=10",
         "turn.start_ahead_m=37", "friction.change_ahead_m=137", "friction.mu_before=0.77",
         "friction.mu_turn=0.19", "road.lane_width_m=3.0", "turn.direction=left",
-        "initial_speed_mps=30.4", "duration_s=13"])
+        "initial_speed_mps=30.4", "duration_s=13", "planner.reference_drive_cap=true"])
     m = compute_metrics(run_scenario(cfg, "GT"))
     assert not m.spun and not m.minimal_risk
     assert m.max_lane_excursion_m < 0.25

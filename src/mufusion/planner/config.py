@@ -165,8 +165,9 @@ class PlannerConfig:
     reference_regain_limit: bool = True
     # In cruise, no rear drive at a stage whose guessed speed is above the curve speed
     # reference by more than 0.5 m/s (planner/drive_cap.py): a plan above the reference may not
-    # drive now and brake at the friction limit later (docs/decisions/0105).
-    reference_drive_cap: bool = True
+    # drive now and brake at the friction limit later. Off: measured, not adopted (the edge
+    # draw's spin 2.15 m -> 5 cm, but a feasible hairpin 0 -> 0.68 m; docs/decisions/0105).
+    reference_drive_cap: bool = False
     # In cruise, the speed reference (``curve_speed_reference``) also a soft upper bound on each
     # stage's planned speed (planner/speed_ceiling.py): tracked only in a least-squares sense,
     # plans rise above its braking ramps for their first stages and catch up at the friction

@@ -7,10 +7,15 @@ every stage. A plan already above the reference could still drive at its first s
 up for it with braking at the friction limit further on — a branch the real-time iteration can
 follow from step to step, each plan putting the braking off by a stage: the truck of the edge
 draw at R 106 m accelerated from 17.1 to 18.6 m/s towards a μ 0.19 section while every plan
-braked to the reference's 14.5 m/s a second later, and spun off on it (docs/decisions/0105). A
-cruise controller does not drive above its set speed; here a stage whose guessed speed is
-above the reference by more than :data:`DRIVE_CAP_MARGIN_MPS` gets no drive. Braking stays
-free: the cap does not ask the plan to slow down, the tracking cost does.
+braked to the reference's 14.5 m/s a second later, and spun off on it. A cruise controller
+does not drive above its set speed; here a stage whose guessed speed is above the reference by
+more than :data:`DRIVE_CAP_MARGIN_MPS` gets no drive. Braking stays free: the cap does not ask
+the plan to slow down, the tracking cost does.
+
+Off by default (``PlannerConfig.reference_drive_cap``): measured, not adopted. It takes the
+spin away (2.15 m out -> 5 cm), but a truck before a feasible 18 m hairpin, whose later stages it
+capped, moved its drive to the first stages instead and left the lane by 0.68 m where it had
+kept it (docs/decisions/0105).
 """
 
 from __future__ import annotations

@@ -210,8 +210,8 @@ class PlannerSettings(_Strict):
     reference_drive_cap: bool = PlannerConfig.reference_drive_cap
     """In cruise, no rear drive at a stage whose guessed speed is above the speed reference by
     more than 0.5 m/s, so a plan above the reference cannot drive now and put its braking off
-    (:mod:`mufusion.planner.drive_cap`, docs/decisions/0105); ``false``: the drive's cap at
-    every stage."""
+    (:mod:`mufusion.planner.drive_cap`); off (the default: measured, not adopted,
+    docs/decisions/0105), the drive's cap at every stage."""
     steering_rate_limit: bool = True
     """Plan the front lateral force as a state whose rate the steering actuator's rate limit
     bounds (:mod:`mufusion.planner.front_force`); ``false``: the forces are free inputs, as in
