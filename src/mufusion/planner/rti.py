@@ -219,8 +219,8 @@ def _drive_cap_n(par: VehicleParams, cfg: PlannerConfig, mode: PlannerMode,
     # No traction while evading or stopping: the rear tires' friction is kept for lateral
     # force and braking. In cruise, traction is capped at a heavy vehicle's acceleration, not at
     # the friction limit: regaining speed at the limit after an evasion leaves the driven axle
-    # no lateral reserve; and none at stages above the curve speed reference (planner/
-    # drive_cap.py, docs/decisions/0105).
+    # no lateral reserve. With ``reference_drive_cap`` (off: measured, not adopted,
+    # docs/decisions/0105), none at stages above the curve speed reference.
     if mode != "cruise":
         return 0.0
     cap = par.mass_kg * cfg.max_cruise_accel_mps2
