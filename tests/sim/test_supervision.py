@@ -428,8 +428,10 @@ def test_an_evasion_that_no_plausible_friction_makes_pass_turns_into_braking_in_
     # (μ̂ 0.6 at 0.1 s instead of 0.95), and the evasion the later steps keep leaves the lane by
     # 1.08 m where the swerving run stays in it.
     # Since the check plans at the tires' limit (the posterior's upper edge ÷ λ, decision 0103),
-    # the first two steps' check passes (their candidates are kept, 0.41 m out of the lane) and
-    # the verdict comes at 0.2 s: 14.4 against 17.5 m/s (15.4 against 15.0 m/s before 0103).
+    # at the first two steps the check still hits but the stop planned after it, one iteration
+    # from the check's evasion, is rejected (outside its polygons), so the candidate is kept
+    # (0.41 m out of the lane); the verdict comes at 0.2 s: 14.4 against 17.5 m/s (15.4 against
+    # 15.0 m/s before 0103).
     assert b.impact_speed_mps < s.impact_speed_mps - 0.3
     futile = _events(braking, EventKind.FUTILE_EVASION)
     assert len(futile) >= 2 and float(futile["t_s"].min()) <= 0.2
