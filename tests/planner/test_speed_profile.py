@@ -16,8 +16,8 @@ from mufusion.planner.speed_profile import (
     descent_limited_profile_mps,
     max_speed_profile_mps,
     regain_limited_profile_mps,
-    sharpest_under_axles,
 )
+from mufusion.planner.under_axles import sharpest_under_axles
 from mufusion.vehicle.params import GRAVITY_MPS2, TRUCK
 from mufusion.vehicle.planner_model import State
 

@@ -1,7 +1,14 @@
 import numpy as np
 
 def backward_pass(
-    u: np.ndarray, kappa: np.ndarray, accel: np.ndarray, s: np.ndarray, two_b: float
+    u: np.ndarray,
+    kappa: np.ndarray,
+    accel: np.ndarray,
+    s: np.ndarray,
+    two_b: float,
+    p: float = ...,
+    hl: float = ...,
+    g: float = ...,
 ) -> None: ...
 def forward_pass(
     out: np.ndarray,
@@ -21,4 +28,7 @@ def descent_pass(
     s: np.ndarray,
     w: float,
     fraction: float,
+    p: float = ...,
+    hl: float = ...,
+    g: float = ...,
 ) -> None: ...

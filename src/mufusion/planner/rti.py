@@ -38,11 +38,9 @@ from mufusion.planner.safeguards import (
 )
 from mufusion.planner.sampling import SamplingConfig
 from mufusion.planner.speed_ceiling import speed_ceiling_mps
-from mufusion.planner.speed_profile import (
-    curve_speed_reference_mps,
-    lowest_under_axles,
-    sharpest_under_axles,
-)
+from mufusion.planner.axle_reach import PitchTransfer
+from mufusion.planner.speed_profile import curve_speed_reference_mps
+from mufusion.planner.under_axles import lowest_under_axles, sharpest_under_axles
 from mufusion.planner.unseen_road import UnseenRoad
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import State, rear_lateral_force_n
@@ -151,6 +149,9 @@ def iterate(
                 (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2)
                 if cfg.reference_regain_limit and mode == "cruise" else None,
                 unseen,
+                # The ramps brake with what the two axles reach beside the curve's lateral
+                # force, pitch load transfer counted (docs/decisions/0106).
+                PitchTransfer.of(par) if cfg.reference_load_transfer else None,
             )
             if cfg.speed_ceiling and mode == "cruise":
                 # The reference's speeds are the point mass's highest: a ceiling, not only a

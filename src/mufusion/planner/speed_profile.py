@@ -24,6 +24,7 @@ from types import ModuleType
 
 import numpy as np
 
+from mufusion.planner.axle_reach import PitchTransfer, two_axle_braking_mps2
 from mufusion.planner.unseen_road import MuOfS
 from mufusion.vehicle.params import GRAVITY_MPS2
 
@@ -46,6 +47,7 @@ def max_speed_profile_mps(
     accel_fraction: float,
     end_speed_mps: float,
     braking_fraction: float = 1.0,
+    transfer: PitchTransfer | None = None,
 ) -> np.ndarray:
     """Highest speed at each grid point from which every later curvature limit can be met.
 
@@ -64,6 +66,10 @@ def max_speed_profile_mps(
         before a tighter point use, in (0, 1]. 1 brakes as late as the friction allows; less
         starts braking earlier and keeps the rest as a reserve (the curvature limits
         themselves are unchanged).
+    transfer
+        The vehicle's pitch load transfer: the ramps brake with what its two axles reach beside
+        the lateral demand (:func:`~mufusion.planner.axle_reach.two_axle_braking_mps2`) instead
+        of the point mass's ``√(a² − a_y²)``.
 
     Returns
     -------
@@ -105,7 +111,7 @@ def max_speed_profile_mps(
     u_arr = np.minimum(limit, end_speed_mps**2)
     if _COMPILED is not None:
         _COMPILED.backward_pass(u_arr, kappa, accel, np.ascontiguousarray(s),
-                                2.0 * braking_fraction)
+                                2.0 * braking_fraction, *_transfer_args(transfer))
         return np.sqrt(u_arr)
     u = u_arr.tolist()
     k_list, a_list, s_list = kappa.tolist(), accel.tolist(), s.tolist()
@@ -114,11 +120,19 @@ def max_speed_profile_mps(
     for i in range(s.size - 2, -1, -1):
         k_i, s_i, a = k_list[i], s_list[i], a_list[i]
         lateral = u_next * (k_next if k_next > k_i else k_i)  # max(k_i, k_next)
-        braking = math.sqrt(max(a * a - lateral * lateral, 0.0))
+        braking = (math.sqrt(max(a * a - lateral * lateral, 0.0)) if transfer is None
+                   else two_axle_braking_mps2(a, lateral, transfer))
         reachable = u_next + two_b * braking * (s_next - s_i)
         u_next = u[i] = reachable if reachable < u[i] else u[i]  # min(u[i], reachable)
         k_next, s_next = k_i, s_i
     return np.sqrt(np.array(u))
+
+
+def _transfer_args(transfer: PitchTransfer | None) -> tuple[float, float, float]:
+    """The compiled passes' ``p, hl, g`` (``hl < 0``: the point mass's reach)."""
+    if transfer is None:
+        return 0.0, -1.0, GRAVITY_MPS2
+    return transfer.front_share, transfer.height_per_wheelbase, GRAVITY_MPS2
 
 
 def _pass_arrays(
@@ -223,6 +237,7 @@ def descent_limited_profile_mps(
     profile_mps: np.ndarray,
     start_speed_mps: float,
     braking_fraction: float,
+    transfer: PitchTransfer | None = None,
 ) -> np.ndarray:
     """``profile_mps`` raised to where a point mass from ``start_speed_mps`` could brake to.
 
@@ -235,8 +250,9 @@ def descent_limited_profile_mps(
 
     Parameters
     ----------
-    s_m, curvature_1pm, mu, accel_fraction, braking_fraction
-        As for :func:`max_speed_profile_mps` (same grid).
+    s_m, curvature_1pm, mu, accel_fraction, braking_fraction, transfer
+        As for :func:`max_speed_profile_mps` (same grid; ``transfer``: the two axles' reach on
+        the share ``b`` of the friction).
     profile_mps
         The speeds to raise, shape (M,) [m/s].
     start_speed_mps
@@ -262,7 +278,8 @@ def descent_limited_profile_mps(
     if _COMPILED is not None:
         out_arr = np.empty(floor_arr.size)
         _COMPILED.descent_pass(out_arr, floor_arr, kappa_arr, accel_arr, s_arr,
-                               start_speed_mps * start_speed_mps, float(braking_fraction))
+                               start_speed_mps * start_speed_mps, float(braking_fraction),
+                               *_transfer_args(transfer))
         return np.sqrt(out_arr)
     kappa, accel = kappa_arr.tolist(), accel_arr.tolist()
     s_list, floor = s_arr.tolist(), floor_arr.tolist()
@@ -271,66 +288,11 @@ def descent_limited_profile_mps(
     for i in range(len(floor) - 1):
         lateral = w * max(kappa[i], kappa[i + 1])
         share = braking_fraction * accel[i]
-        braking = math.sqrt(max(share * share - lateral * lateral, 0.0))
+        braking = (math.sqrt(max(share * share - lateral * lateral, 0.0)) if transfer is None
+                   else two_axle_braking_mps2(share, lateral, transfer))
         w = max(w - 2.0 * braking * (s_list[i + 1] - s_list[i]), floor[i + 1])
         out.append(w)
     return np.sqrt(np.array(out))
-
-
-def lowest_under_axles(
-    mu_hat_of_s: Callable[[np.ndarray], np.ndarray], behind_m: float, ahead_m: float
-) -> Callable[[np.ndarray], np.ndarray]:
-    """``μ̂(s)`` replaced by the lowest estimate from ``behind_m`` behind to ``ahead_m`` ahead of
-    ``s`` [m] (at those two points and at ``s``).
-
-    For the speed reference with ``s`` the centre of gravity's: where the friction drops, the
-    front axle meets the drop l_f before the CoG does, and a brake torque commanded for the
-    higher friction is still being applied one torque lag later. A reference that braked at the
-    CoG's friction asked for the high friction's deceleration up to the drop, and the front
-    wheels reached the low friction at that torque and locked (docs/decisions/0055).
-
-    Examples
-    --------
-    >>> mu = lowest_under_axles(lambda s: np.where(np.asarray(s) < 10.0, 0.9, 0.3), 1.5, 2.0)
-    >>> mu(np.array([7.0, 8.5, 11.0, 12.0])).tolist()
-    [0.9, 0.3, 0.3, 0.3]
-    """
-
-    def lowest(s_m: np.ndarray) -> np.ndarray:
-        s = np.asarray(s_m, dtype=float)
-        return np.minimum(np.minimum(mu_hat_of_s(s - behind_m), mu_hat_of_s(s)),
-                          mu_hat_of_s(s + ahead_m))
-
-    return lowest
-
-
-def sharpest_under_axles(
-    curvature_of_s: Callable[[np.ndarray], np.ndarray], behind_m: float, ahead_m: float
-) -> Callable[[np.ndarray], np.ndarray]:
-    """``κ(s)`` replaced by the sharpest curvature (largest ``|κ|``, its sign kept) from
-    ``behind_m`` behind to ``ahead_m`` ahead of ``s`` [m] (at those two points and at ``s``).
-
-    :func:`lowest_under_axles` for the road's curvature: with ``s`` the centre of gravity's, a
-    reference that reaches a curve's speed only where the centre of gravity enters it still
-    brakes while the front axle turns in, and a brake torque commanded at its end lands one
-    torque lag later, inside the curve. Braking while turning in at the curve's limit speed
-    unloads the rear axle the curve needs (docs/decisions/0066).
-
-    Examples
-    --------
-    >>> kappa = sharpest_under_axles(lambda s: np.where(np.asarray(s) < 10.0, 0.0, -0.05),
-    ...                              1.5, 4.0)
-    >>> kappa(np.array([5.0, 6.5, 11.0, 12.0])).tolist()
-    [0.0, -0.05, -0.05, -0.05]
-    """
-
-    def sharpest(s_m: np.ndarray) -> np.ndarray:
-        s = np.asarray(s_m, dtype=float)
-        candidates = np.stack([np.asarray(curvature_of_s(s + offset), dtype=float)
-                               * np.ones_like(s) for offset in (-behind_m, 0.0, ahead_m)])
-        return np.take_along_axis(candidates, np.abs(candidates).argmax(axis=0)[None], 0)[0]
-
-    return sharpest
 
 
 def curve_speed_reference_mps(
@@ -343,6 +305,7 @@ def curve_speed_reference_mps(
     braking_fraction: float = 1.0,
     regain: tuple[float, float] | None = None,
     unseen: tuple[MuOfS, float] | None = None,
+    transfer: PitchTransfer | None = None,
 ) -> np.ndarray:
     """The cruise speed capped by :func:`max_speed_profile_mps` at the stages' positions.
 
@@ -357,7 +320,8 @@ def curve_speed_reference_mps(
     cornering included: a hypothesis about the road not yet seen asks for the braking the
     reference's straight ramps ask for anyway, never for a step down, and never for braking
     that leaves a plan cornering near its limit no friction for its lateral corrections
-    (docs/decisions/0084).
+    (docs/decisions/0084). ``transfer``: every braking ramp with the two axles' reach
+    (docs/decisions/0106).
     """
     s0 = float(stage_s_m[0])
     coarse = s0 + np.arange(0.0, MAX_LOOKAHEAD_M + PROFILE_STEP_M, PROFILE_STEP_M)
@@ -371,7 +335,7 @@ def curve_speed_reference_mps(
         # np.clip's values for these non-zero bounds, without its per-call overhead.
         mu = np.minimum(np.maximum(np.asarray(mu_of_s(grid), dtype=float), 0.05), 2.0)
         return mu, max_speed_profile_mps(grid, kappa, mu, accel_fraction, cruise_speed_mps,
-                                         braking_fraction)
+                                         braking_fraction, transfer)
 
     mu, profile = profile_on(mu_hat_of_s)
     if regain is not None:
@@ -382,5 +346,5 @@ def curve_speed_reference_mps(
         # curves that exist).
         floor_mu, floor = profile_on(unseen[0])
         profile = np.minimum(profile, descent_limited_profile_mps(
-            grid, kappa, floor_mu, accel_fraction, floor, unseen[1], braking_fraction))
+            grid, kappa, floor_mu, accel_fraction, floor, unseen[1], braking_fraction, transfer))
     return np.interp(np.asarray(stage_s_m, dtype=float), grid, profile)

@@ -207,6 +207,11 @@ class PlannerSettings(_Strict):
     """In cruise, the speed reference regains speed from the vehicle's own no faster than the
     drive's acceleration cap on the g-g ellipse allows (less while cornering); ``false``: the
     reference jumps back to the profile's speed."""
+    reference_load_transfer: bool = PlannerConfig.reference_load_transfer
+    """The speed reference's braking ramps brake with what the vehicle's two axles reach beside
+    the curve's lateral force, pitch load transfer counted
+    (:mod:`mufusion.planner.axle_reach`, docs/decisions/0106); ``false``: the point mass's
+    braking, ``√(a² − a_y²)``."""
     reference_drive_cap: bool = PlannerConfig.reference_drive_cap
     """In cruise, no rear drive at a stage whose guessed speed is above the speed reference by
     more than 0.5 m/s, so a plan above the reference cannot drive now and put its braking off

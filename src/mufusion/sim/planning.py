@@ -120,7 +120,7 @@ class Planning:
         has passed keeps the μ̂ it had (:func:`road_behind`, the vehicle's length back).
 
         An estimate starts under the centre of gravity, but the rear axle is l_r behind it: the
-        speed reference's μ̂ under the axles (planner.speed_profile.lowest_under_axles) saw the
+        speed reference's μ̂ under the axles (planner.under_axles.lowest_under_axles) saw the
         CoG's μ̂ there, so after a rise the truck drove its rear axle, still on ice, at the high
         friction's pace (docs/decisions/0072).
         """
