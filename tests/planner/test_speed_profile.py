@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from mufusion.planner.axle_reach import PitchTransfer
 from mufusion.planner.ocp import PlannerConfig
 from mufusion.planner.planner import TractionAdaptivePlanner
 from mufusion.planner.speed_profile import (
@@ -18,7 +19,7 @@ from mufusion.planner.speed_profile import (
     regain_limited_profile_mps,
 )
 from mufusion.planner.under_axles import sharpest_under_axles
-from mufusion.vehicle.params import GRAVITY_MPS2, TRUCK
+from mufusion.vehicle.params import CAR, GRAVITY_MPS2, TRUCK
 from mufusion.vehicle.planner_model import State
 
 ARC_START_M = 30.0
@@ -307,9 +308,11 @@ def test_the_cruise_reference_regains_speed_from_the_vehicle_in_a_curve() -> Non
     data=st.data(),
     start=st.floats(0.0, 30.0),
     braking_fraction=st.floats(0.05, 1.0),
+    transfer=st.sampled_from([None, PitchTransfer.of(TRUCK), PitchTransfer.of(CAR),
+                              PitchTransfer(0.5, 0.0)]),
 )
 def test_the_compiled_passes_equal_the_python_loops_bit_for_bit(
-    steps, data, start, braking_fraction
+    steps, data, start, braking_fraction, transfer
 ):
     # The compiled passes (where the install built them) replace the Python loops at every
     # planning step: the same IEEE operations in the same order, NaN and ties included.
@@ -326,10 +329,11 @@ def test_the_compiled_passes_equal_the_python_loops_bit_for_bit(
 
     def both():
         with np.errstate(divide="ignore", invalid="ignore"):
-            profile = max_speed_profile_mps(s, kappa, mu, 0.9, 20.0, braking_fraction)
+            profile = max_speed_profile_mps(s, kappa, mu, 0.9, 20.0, braking_fraction,
+                                            transfer)
             return (profile, regain_limited_profile_mps(s, kappa, mu, 0.9, profile, start, 1.5),
                     descent_limited_profile_mps(s, kappa, mu, 0.9, profile, start + 5.0,
-                                                braking_fraction))
+                                                braking_fraction, transfer))
 
     compiled = both()
     with pytest.MonkeyPatch.context() as m:

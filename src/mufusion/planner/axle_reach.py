@@ -1,4 +1,4 @@
-"""The braking a two-axle vehicle has left while cornering: its g-g diagram with pitch load transfer.
+"""The braking a two-axle vehicle has left while cornering: its g-g diagram with load transfer.
 
 The speed reference's braking ramps (:mod:`mufusion.planner.speed_profile`) were the point
 mass's: at lateral acceleration ``a_y`` it brakes with ``√(a² − a_y²)``, ``a = λ' μ̂ g``. A
