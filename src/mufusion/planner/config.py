@@ -165,8 +165,9 @@ class PlannerConfig:
     reference_regain_limit: bool = True
     # The reference's braking ramps brake with what the vehicle's two axles reach beside the
     # curve's lateral force, pitch load transfer counted (planner/axle_reach.py), instead of the
-    # point mass's √(a² − a_y²) (docs/decisions/0106).
-    reference_load_transfer: bool = True
+    # point mass's √(a² − a_y²). Off: measured, not adopted (the edge draws' spin 2.15 m ->
+    # 0.18 m, but a feasible hairpin truck 0 -> 5.6 cm; docs/decisions/0106).
+    reference_load_transfer: bool = False
     # In cruise, no rear drive at a stage whose guessed speed is above the curve speed
     # reference by more than 0.5 m/s (planner/drive_cap.py): a plan above the reference may not
     # drive now and brake at the friction limit later. Off: measured, not adopted (the edge

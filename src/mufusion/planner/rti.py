@@ -149,8 +149,9 @@ def iterate(
                 (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2)
                 if cfg.reference_regain_limit and mode == "cruise" else None,
                 unseen,
-                # The ramps brake with what the two axles reach beside the curve's lateral
-                # force, pitch load transfer counted (docs/decisions/0106).
+                # With ``reference_load_transfer`` (off: measured, not adopted) the ramps brake
+                # with what the two axles reach beside the curve's lateral force
+                # (docs/decisions/0106).
                 PitchTransfer.of(par) if cfg.reference_load_transfer else None,
             )
             if cfg.speed_ceiling and mode == "cruise":

@@ -210,8 +210,8 @@ class PlannerSettings(_Strict):
     reference_load_transfer: bool = PlannerConfig.reference_load_transfer
     """The speed reference's braking ramps brake with what the vehicle's two axles reach beside
     the curve's lateral force, pitch load transfer counted
-    (:mod:`mufusion.planner.axle_reach`, docs/decisions/0106); ``false``: the point mass's
-    braking, ``√(a² − a_y²)``."""
+    (:mod:`mufusion.planner.axle_reach`); off (the default: measured, not adopted,
+    docs/decisions/0106), the point mass's braking, ``√(a² − a_y²)``."""
     reference_drive_cap: bool = PlannerConfig.reference_drive_cap
     """In cruise, no rear drive at a stage whose guessed speed is above the speed reference by
     more than 0.5 m/s, so a plan above the reference cannot drive now and put its braking off
