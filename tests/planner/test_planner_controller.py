@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -194,53 +191,3 @@ def test_a_non_finite_torque_measurement_is_not_fed_back():
     without = TrackingController(TRUCK).command(0.05, x, 0.0, plan, 0.0)
     broken = TrackingController(TRUCK).command(0.05, x, 0.0, plan, 0.0, (float("nan"), 0.0))
     assert broken == without and np.isfinite(broken.torque_front_nm)
-
-
-def _steady_steer(ctrl: TrackingController, plan: Plan) -> float:
-    """The steering the rate-limited command settles on for the plan at its first stage."""
-    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
-    steer = 0.0
-    for _ in range(200):
-        steer = ctrl.command(0.0, x, steer, plan, 0.0).steer_rad
-    return steer
-
-
-def test_the_steering_inverts_the_tire_on_the_friction_under_the_front_axle():
-    # The centre of gravity on μ̂ 0.5, the front axle already on 0.9: the planned 2e4 N of
-    # front force takes the slip angle of the 0.9 tire (smaller: the high-friction tire is
-    # further from its peak), not the 0.5 tire's, which the front would turn well past.
-    force, load = 2e4, 5e4
-    plan = _plan(force, 0.0, 0.0)
-    plan = dataclasses.replace(plan, mu_hat=0.5 * np.ones(40), mu_hat_front=0.9 * np.ones(40))
-    alpha = {mu: front_slip_angle_for_force_rad(force, load, mu, TRUCK.tire) for mu in (0.5, 0.9)}
-    assert alpha[0.9] < alpha[0.5] - 0.01
-    on = _steady_steer(TrackingController(TRUCK, gains=ControllerGains()), plan)
-    off = _steady_steer(
-        TrackingController(TRUCK, gains=ControllerGains(steer_at_front_friction=False)), plan)
-    # The kinematic part is the same (a straight plan at rest in yaw): the two settle apart by
-    # the two slip angles.
-    assert on == pytest.approx(alpha[0.9], abs=1e-9)
-    assert off == pytest.approx(alpha[0.5], abs=1e-9)
-    # A plan without the front axle's μ̂ (a plug-in planner's) steers on its stages' own.
-    bare = dataclasses.replace(plan, mu_hat_front=None)
-    assert _steady_steer(TrackingController(TRUCK), bare) == pytest.approx(alpha[0.5], abs=1e-9)
-
-
-def test_a_solved_plan_carries_the_friction_under_each_stages_front_axle():
-    from mufusion.planner.ocp import PlannerConfig
-    from mufusion.planner.planner import TractionAdaptivePlanner
-
-    def mu(s):  # a rise 20 m ahead
-        return np.where(np.asarray(s, dtype=float) >= 20.0, 0.9, 0.4)
-
-    planner = TractionAdaptivePlanner(TRUCK, PlannerConfig())
-    x = np.array([0.0, 0.0, 0.0, 0.0, 15.0, 0.0])
-    plan = planner.step(x, 0.0, lambda s: 0.0 * np.asarray(s, dtype=float), mu, [], "cruise",
-                        15.0)
-    s_k = plan.states[:-1, State.s]
-    assert plan.mu_hat_front is not None
-    np.testing.assert_array_equal(plan.mu_hat_front, mu(s_k + TRUCK.cog_to_front_axle_m))
-    # Where the front axle has crossed the rise and the centre of gravity has not, they differ.
-    crossing = (s_k < 20.0) & (s_k + TRUCK.cog_to_front_axle_m >= 20.0)
-    assert np.any(crossing)
-    assert np.all(plan.mu_hat_front[crossing] == 0.9) and np.all(plan.mu_hat[crossing] == 0.4)

@@ -47,12 +47,6 @@ class ControllerGains:
     ``PlannerConfig.torque_lag`` the plan's forces already follow the lag: the stage's commands
     are sent either way, and the feedback (``True``) is onto the plan's forces one controller
     period ahead."""
-    steer_at_front_friction: bool = True
-    """The steering's inverse tire model at the μ̂ under the front axle
-    (``Plan.mu_hat_front``), not at the centre of gravity's: where the friction changes
-    between the axles in a curve, the slip angle for the planned front force on the old
-    friction turned the truck by 0.08 rad within 0.2 s (docs/decisions/0107). ``False``: the
-    stage's own μ̂, as in the paper's method."""
 
 
 def _magic_formula_lateral(alpha: np.ndarray, fz: float, mu: float, tire: TireParams):
@@ -170,8 +164,7 @@ class TrackingController:
         tau_p = min(max(tau + g.steer_preview_s / plan.dt_s, 0.0), n - 1e-9)
         k_p = int(tau_p)
         x_p = _interpolate(plan.states, k_p, tau_p - k_p)
-        front = plan.mu_hat_front if g.steer_at_front_friction else None
-        mu_p = float((plan.mu_hat if front is None else front)[k_p])
+        mu_p = float(plan.mu_hat[k_p])
         alpha_f = front_slip_angle_for_force_rad(
             float(plan.inputs[k_p, Input.fyf]), float(plan.normal_load_front_n[k_p]), mu_p,
             self._assumed_tire(mu_p),

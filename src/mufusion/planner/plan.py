@@ -58,10 +58,6 @@ class Plan:
     held: bool = False
     """A stop at rest held with the brakes on, not solved
     (:func:`~mufusion.planner.rti.held_plan`)."""
-    mu_hat_front: np.ndarray | None = None
-    """μ̂ under each stage's front axle (``l_f`` ahead of the planned ``s_k``), sanitised like
-    ``mu_hat``: the friction the controller's inverse tire model steers on
-    (docs/decisions/0107); ``None``: the stage's own ``mu_hat``."""
 
 
 @dataclass(frozen=True)

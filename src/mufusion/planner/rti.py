@@ -256,9 +256,6 @@ def plan_of(
     load_front, load_rear = stage.fzf_n, stage.fzr_n
     if cfg.load_transfer:
         load_front, load_rear = axle_loads_n(us, par)
-    # The stages' count before another query replaces it (planner/safeguards.py).
-    sanitized = problem.mu_of_s.last_count
-    mu_front = problem.mu_of_s(xs[:-1, State.s] + par.cog_to_front_axle_m)
     return Plan(
         t0_s=float(t_s), states=xs, inputs=us, rear_lateral_force_n=np.asarray(fyr),
         mu_hat=stage.mu_hat, normal_load_front_n=load_front,
@@ -268,7 +265,7 @@ def plan_of(
         sampled_reinit=sampled, robust_qp_retry=solved.retried, dt_s=cfg.dt_s,
         fallback_reason=solved.reason,
         consecutive_fallbacks=consecutive_fallbacks,
-        mu_sanitized_stages=sanitized, mode=problem.mode, mu_hat_front=mu_front,
+        mu_sanitized_stages=problem.mu_of_s.last_count, mode=problem.mode,
     )
 
 

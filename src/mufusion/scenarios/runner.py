@@ -169,9 +169,7 @@ def build_loop(
     config = getattr(the_planner, "config", own_config)
     the_controller: Controller = (
         TrackingController(
-            params, config,
-            ControllerGains(torque_compensation=cfg.sim.torque_compensation,
-                            steer_at_front_friction=cfg.sim.steer_at_front_friction),
+            params, config, ControllerGains(torque_compensation=cfg.sim.torque_compensation)
         ) if controller is None
         else make_component_plugin(controller, CONTROLLERS, params, config)
         if isinstance(controller, str) else controller

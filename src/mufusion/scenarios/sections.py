@@ -262,10 +262,6 @@ class SimSettings(_Strict):
     torque time constant ahead, plus feedback on the measured torques, so the lagging brakes
     deliver the plan's forces on time (:class:`mufusion.planner.controller.ControllerGains`);
     ``false``: the forces planned for now, as in the paper's controller."""
-    steer_at_front_friction: bool = True
-    """The controller's inverse tire model steers at the μ̂ under the front axle, not at the
-    centre of gravity's (:class:`mufusion.planner.controller.ControllerGains`,
-    docs/decisions/0107); ``false``: the stage's own μ̂, as in the paper's controller."""
     abs: bool = True
     """Anti-lock braking in the vehicle (:mod:`mufusion.vehicle.slip_control`), as on every
     production car and truck; ``false`` shows what it does."""
