@@ -1,6 +1,6 @@
 """The braking a two-axle vehicle has left while cornering: its g-g diagram with load transfer.
 
-The speed reference's braking ramps (:mod:`mufusion.planner.speed_profile`) were the point
+The speed reference's braking ramps (:mod:`mufusion.planner.speed_profile`) are the point
 mass's: at lateral acceleration ``a_y`` it brakes with ``√(a² − a_y²)``, ``a = λ' μ̂ g``. A
 vehicle brakes with two axles whose loads move: decelerating at ``d`` moves ``m d h / L`` from
 the rear axle to the front, while the steady turn loads each axle laterally in its static share
@@ -20,8 +20,10 @@ load transfer between the wheels of an axle (the planner's single-track model ha
 The truck (h 1.0 m on a 3.4 m wheelbase, rear share 0.355) at ``a/g`` 0.9 and half its
 lateral reach has 0.67 of the friction left for braking where the point mass has 0.87; at
 0.7 of the lateral reach 0.40 against 0.71. The car (h 0.57 m, L 2.58 m): 0.83 and 0.63.
-A reference braking with the point mass's reach asked the truck on a curve's clothoid for
-decelerations its unloaded rear could not give beside the curve's lateral force
+A reference braking with the point mass's reach asks the truck on a curve's clothoid for
+decelerations its unloaded rear cannot give beside the curve's lateral force; braking with
+this reach instead (``planner.reference_load_transfer``) was measured and not adopted: it
+moves which narrow-lane and hairpin trucks leave their lane by centimetres, not how many
 (docs/decisions/0106).
 """
 
