@@ -12,6 +12,9 @@ which the manoeuvre still fits, minus the entry speed) and the quantities used.
 :mod:`~mufusion.scenarios.feasibility.road` judges any road (the profile along its path, the
 pop-up envelopes for static obstacles in the own lane).
 :func:`classify_scenario` reads them off a :class:`~mufusion.scenarios.config.ScenarioConfig`.
+:func:`least_lane_excursion` (:mod:`~mufusion.scenarios.feasibility.transient`) is the offline
+second opinion on a turn: the least lane excursion any controller of the plant's own equations
+reaches over the whole manoeuvre (an optimal-control problem, seconds to minutes per variant).
 Derivation: ``docs/feasibility.md``.
 """
 
@@ -40,6 +43,7 @@ from mufusion.scenarios.feasibility.road import (
     path_limit,
     road_feasibility,
 )
+from mufusion.scenarios.feasibility.transient import TransientVerdict, least_lane_excursion
 from mufusion.scenarios.feasibility.turn import (
     TurnFeasibility,
     TurnLimit,
@@ -60,6 +64,7 @@ __all__ = [
     "FeasibilityClass",
     "PopupFeasibility",
     "RoadFeasibility",
+    "TransientVerdict",
     "TurnFeasibility",
     "TurnLimit",
     "braking_limited_speed_mps",
@@ -67,6 +72,7 @@ __all__ = [
     "classify_speed_margin",
     "clothoid_offsets_m",
     "effective_radius_m",
+    "least_lane_excursion",
     "popup_feasibility",
     "summary_fields",
     "turn_feasibility",
