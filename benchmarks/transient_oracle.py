@@ -10,7 +10,11 @@ body in the lane. A run out of its lane where ``E* = 0`` is lost by the closed l
 physics; ``E* > 0`` explains it.
 
 Run: ``python benchmarks/transient_oracle.py DIR [DIR ...] [--where vehicle=truck]
-[--where road.lane_width_m=3.0] [--exits-only] [--jobs 2] [--csv OUT.csv]``. One solve takes
+[--where road.lane_width_m=3.0] [--exits-only] [--from-run] [--max-utilization 0.9] [--ds 1]
+[--jobs 2] [--csv OUT.csv]``. ``--from-run`` starts each search from the run's own trajectory
+(a run that kept its lane is then a point with ``E = 0``: the check that the oracle's model
+admits what the plant did) before the point-mass speed profiles; ``--max-utilization`` keeps
+the driver within that share of each axle's friction (a planner's reserve). One solve takes
 tens of seconds to minutes (IPOPT over every metre of the manoeuvre). Prints a Markdown table and
 a final JSON line; the findings are in docs/decisions/0108.
 """
@@ -31,6 +35,7 @@ from mufusion.scenarios import load_scenario
 from mufusion.scenarios.config import TurnScenario
 from mufusion.scenarios.feasibility.transient import (
     EXCURSION_TOLERANCE_M,
+    TrajectoryGuess,
     least_lane_excursion,
 )
 from mufusion.vehicle.params import vehicle_preset
@@ -56,8 +61,10 @@ def _selected(directories: list[Path], config: str, where: list[str],
     return runs
 
 
-def assess(run: tuple[Path, dict], ds_m: float) -> dict[str, object]:
-    """The transient verdict of one run beside the run's own trajectory."""
+def assess(run: tuple[Path, dict], ds_m: float, from_run: bool = False,
+           max_utilization: float = 1.0) -> dict[str, object]:
+    """The transient verdict of one run beside the run's own trajectory (``from_run``: the
+    search starts from that trajectory before the point-mass speed profiles)."""
     directory, data = run
     cfg = load_scenario("turn", list(data["spec"]["overrides"]))
     assert isinstance(cfg, TurnScenario)
@@ -67,8 +74,10 @@ def assess(run: tuple[Path, dict], ds_m: float) -> dict[str, object]:
     curve_end = start + cfg.turn.start_ahead_m + cfg.turn.radius_m * cfg.turn.angle_rad \
         + cfg.turn.clothoid_m
     end = min(curve_end + PAST_THE_CURVE_M, road.length_m)
-    verdict = least_lane_excursion(road, params, start, cfg.initial_speed_mps, end, ds_m=ds_m)
     ts = pd.read_csv(directory / "timeseries.csv")
+    guess = TrajectoryGuess.from_timeseries(ts) if from_run else None
+    verdict = least_lane_excursion(road, params, start, cfg.initial_speed_mps, end, ds_m=ds_m,
+                                   guess=guess, max_utilization=max_utilization)
     ts = ts[ts.s_m <= end]
     worst = ts.iloc[int(np.argmin(ts.lane_margin_m.to_numpy()))]
     k = int(np.argmin(np.abs(verdict.s_m - worst.s_m)))
@@ -78,6 +87,7 @@ def assess(run: tuple[Path, dict], ds_m: float) -> dict[str, object]:
         "run_excursion_m": round(float(metrics["max_lane_excursion_m"]), 4),
         "least_excursion_m": round(verdict.excursion_m, 4),
         "status": verdict.status,
+        "guess": verdict.guess,
         "worst_s_ahead_m": round(float(worst.s_m - start), 1),
         "run_speed_mps": round(float(worst.vx_mps), 2),
         "least_time_speed_mps": round(float(verdict.speed_mps[k]), 2),
@@ -94,11 +104,17 @@ def main(argv: list[str] | None = None) -> int:
                         help="only runs with this override (repeatable)")
     parser.add_argument("--exits-only", action="store_true", help="only runs that left the lane")
     parser.add_argument("--ds", type=float, default=1.0, help="node spacing [m]")
+    parser.add_argument("--from-run", action="store_true",
+                        help="start the search from the run's own trajectory first")
+    parser.add_argument("--max-utilization", type=float, default=1.0,
+                        help="largest share of each axle's friction the driver may use, (0, 1]")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--csv", type=Path, default=None)
     args = parser.parse_args(argv)
     if not args.ds > 0.0:
         parser.error(f"--ds must be > 0, got {args.ds}")
+    if not 0.0 < args.max_utilization <= 1.0:
+        parser.error(f"--max-utilization must be in (0, 1], got {args.max_utilization}")
     if args.jobs < 1:
         parser.error(f"--jobs must be >= 1, got {args.jobs}")
     runs = _selected(args.directories, args.config, args.where, args.exits_only)
@@ -108,7 +124,9 @@ def main(argv: list[str] | None = None) -> int:
     # One solve takes minutes: report each as it ends, keep the table in the runs' order.
     rows: list[dict[str, object]] = [{} for _ in runs]
     with ProcessPoolExecutor(args.jobs) as pool:
-        futures = {pool.submit(assess, run, args.ds): i for i, run in enumerate(runs)}
+        futures = {pool.submit(assess, run, args.ds, args.from_run,
+                               args.max_utilization): i
+                   for i, run in enumerate(runs)}
         for done, future in enumerate(as_completed(futures), start=1):
             row = future.result()
             rows[futures[future]] = row

@@ -43,7 +43,11 @@ from mufusion.scenarios.feasibility.road import (
     path_limit,
     road_feasibility,
 )
-from mufusion.scenarios.feasibility.transient import TransientVerdict, least_lane_excursion
+from mufusion.scenarios.feasibility.transient import (
+    TrajectoryGuess,
+    TransientVerdict,
+    least_lane_excursion,
+)
 from mufusion.scenarios.feasibility.turn import (
     TurnFeasibility,
     TurnLimit,
@@ -64,6 +68,7 @@ __all__ = [
     "FeasibilityClass",
     "PopupFeasibility",
     "RoadFeasibility",
+    "TrajectoryGuess",
     "TransientVerdict",
     "TurnFeasibility",
     "TurnLimit",

@@ -28,13 +28,17 @@ by its heading error ψ against the lane at curvature κ: ``d = n + x sin ψ + y
 
 from __future__ import annotations
 
+import functools
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 
 from mufusion.road import Road
 from mufusion.scenarios.feasibility.common import GRAVITY_MPS2, require_positive
+from mufusion.scenarios.feasibility.transient_model import rk4_function, spatial_model
 from mufusion.vehicle.params import TireParams, VehicleParams
 
 MIN_SPEED_MPS = 2.0
@@ -46,10 +50,6 @@ speed): 1 mm of excursion costs ten such times, so no time saved ever buys one."
 
 EXCURSION_TOLERANCE_M = 1e-4
 """An optimal excursion below this counts as none [m] (the solver's tolerance on the corners)."""
-
-_SLIP_EPS = 1e-6
-"""Smoothing of the slip vector's magnitude (the Magic Formula's direction is undefined at 0)."""
-
 
 @dataclass(frozen=True)
 class TransientVerdict:
@@ -65,6 +65,9 @@ class TransientVerdict:
         least one initial guess.
     status
         IPOPT's return status of the best solve.
+    guess
+        The initial guess the best solve started from: ``"trajectory"`` (a
+        :class:`TrajectoryGuess`, e.g. a recorded run's) or ``"point mass at 0.8 μ g"``.
     s_m, time_s, speed_mps, lateral_m, heading_rad, excursion_at_m
         The trajectory per node: progress, time, speed along the body, lateral offset and heading
         error of the centre of gravity, the deepest corner beyond its edge (≤ 0 inside).
@@ -73,6 +76,7 @@ class TransientVerdict:
     excursion_m: float
     converged: bool
     status: str
+    guess: str
     s_m: np.ndarray
     time_s: np.ndarray
     speed_mps: np.ndarray
@@ -86,76 +90,68 @@ class TransientVerdict:
         return float(self.s_m[int(np.argmax(self.excursion_at_m))])
 
 
-def _unit_tire(ca, kappa, alpha, mu, tire: TireParams):
-    """:func:`~mufusion.vehicle.plant_kernel.unit_tire` in CasADi, the slip magnitude smoothed
-    by :data:`_SLIP_EPS`: forces per unit load ``(g_x, g_y)``."""
-    sx = tire.longitudinal_stiffness_per_load * kappa / mu
-    sy = tire.cornering_stiffness_per_load_1_per_rad * alpha / mu
-    sx2 = sx * sx
-    lam2 = sx2 + sy * sy + _SLIP_EPS**2
-    lam = ca.sqrt(lam2)
-    weight_x = sx2 / lam2
-    shape = weight_x * tire.shape_longitudinal + (1.0 - weight_x) * tire.shape_lateral
-    curv = weight_x * tire.curvature_longitudinal + (1.0 - weight_x) * tire.curvature_lateral
-    bs = lam / shape
-    phi = ca.sin(shape * ca.atan(bs - curv * (bs - ca.atan(bs))))
-    scale = mu * phi / lam
-    return scale * sx, scale * sy
+# The run log's timeseries columns of each guess field (sim.records.TickRecord's names).
+_TIMESERIES_COLUMNS = {
+    "s_m": "s_m", "time_s": "t_s", "lateral_m": "d_m", "heading_rad": "dpsi_rad",
+    "vx_mps": "vx_mps", "vy_mps": "vy_mps", "yaw_rate_radps": "psidot_radps",
+    "steer_rad": "steer_rad", "steer_cmd_rad": "steer_cmd_rad",
+    "slip_front": "wheel_slip_front", "slip_rear": "wheel_slip_rear",
+}
 
 
-def _spatial_model(ca, params: VehicleParams, tire_f: TireParams, tire_r: TireParams):
-    """CasADi function ``(x, u, p) → (dx/ds, F_x front, F_x rear)``.
+@dataclass(frozen=True)
+class TrajectoryGuess:
+    """A trajectory to start the search from, sampled along the lane centre's progress.
 
-    ``x = (n, ψ, v_x, v_y, ψ̇, δ, t)``, ``u = (δ_cmd, κ_f, κ_r)``, ``p = (κ_road, μ_f, μ_r)``.
-    The plant's rates (:meth:`~mufusion.vehicle.plant_kernel.PlantKernel.rates`) divided by
-    the progress rate ``ṡ = (v_x cos ψ − v_y sin ψ) / (1 − n κ)``.
+    Every field is an array of the same length; ``s_m`` increases strictly. A recorded run that
+    kept its lane is (up to the model's discretisation) a point with ``E = 0``, so a solve that
+    starts from it tests whether the oracle's model admits what the plant did, and reaches
+    ``E* = 0`` in far fewer iterations than from a speed profile (:meth:`from_timeseries`).
+    Slip ratios are the wheels' ``(R ω − u) / u``; NaN (no wheel signal yet) counts as 0.
     """
-    x, u, p = ca.SX.sym("x", 7), ca.SX.sym("u", 3), ca.SX.sym("p", 3)
-    n, psi, vx, vy, r, steer = x[0], x[1], x[2], x[3], x[4], x[5]
-    steer_cmd, kappa_f, kappa_r = u[0], u[1], u[2]
-    curvature, mu_f, mu_r = p[0], p[1], p[2]
-    lf, lr, h = params.cog_to_front_axle_m, params.cog_to_rear_axle_m, params.cog_height_m
-    wheelbase, m = lf + lr, params.mass_kg
-    lateral_f = vy + lf * r
-    cos_d, sin_d = ca.cos(steer), ca.sin(steer)
-    u_f = vx * cos_d + lateral_f * sin_d
-    w_f = -vx * sin_d + lateral_f * cos_d
-    alpha_f = -ca.atan(w_f / u_f)
-    alpha_r = -ca.atan((vy - lr * r) / vx)
-    gxf, gyf = _unit_tire(ca, kappa_f, alpha_f, mu_f, tire_f)
-    gxr, gyr = _unit_tire(ca, kappa_r, alpha_r, mu_r, tire_r)
-    # Quasi-static pitch load transfer in the plant's closed form (axles.axle_outputs).
-    g_front = gxf * cos_d - gyf * sin_d
-    accel = GRAVITY_MPS2 * (g_front * lr + gxr * lf) / (wheelbase + h * (g_front - gxr))
-    fzf = m / wheelbase * (GRAVITY_MPS2 * lr - accel * h)
-    fzr = m / wheelbase * (GRAVITY_MPS2 * lf + accel * h)
-    fx_f, fy_f, fx_r, fy_r = gxf * fzf, gyf * fzf, gxr * fzr, gyr * fzr
-    fx_body = fx_f * cos_d - fy_f * sin_d
-    fy_body = fx_f * sin_d + fy_f * cos_d
-    s_dot = (vx * ca.cos(psi) - vy * ca.sin(psi)) / (1.0 - n * curvature)
-    rates = ca.vertcat(
-        vx * ca.sin(psi) + vy * ca.cos(psi),
-        r - curvature * s_dot,
-        (fx_body + fx_r) / m + vy * r,
-        (fy_body + fy_r) / m - vx * r,
-        (lf * fy_body - lr * fy_r) / params.yaw_inertia_kgm2,
-        (steer_cmd - steer) / params.steer_time_constant_s,
-        1.0,
-    )
-    return ca.Function("spatial", [x, u, p], [rates / s_dot, fx_f, fx_r])
+
+    s_m: np.ndarray
+    time_s: np.ndarray
+    lateral_m: np.ndarray
+    heading_rad: np.ndarray
+    vx_mps: np.ndarray
+    vy_mps: np.ndarray
+    yaw_rate_radps: np.ndarray
+    steer_rad: np.ndarray
+    steer_cmd_rad: np.ndarray
+    slip_front: np.ndarray
+    slip_rear: np.ndarray
+
+    def __post_init__(self) -> None:
+        s = np.asarray(self.s_m, dtype=float)
+        if s.ndim != 1 or s.size < 2 or not np.all(np.isfinite(s)) or np.any(np.diff(s) <= 0.0):
+            raise ValueError("s_m must be a finite, strictly increasing array of >= 2 samples")
+        for name in _GUESS_FIELDS:
+            value = np.asarray(getattr(self, name), dtype=float)
+            if value.shape != s.shape:
+                raise ValueError(f"{name} must have the shape of s_m {s.shape}, got {value.shape}")
+            slip = name.startswith("slip")  # NaN: no wheel signal yet
+            if np.any(np.isinf(value) if slip else ~np.isfinite(value)):
+                raise ValueError(f"{name} must be finite{' or NaN' if slip else ''}")
+
+    @classmethod
+    def from_timeseries(cls, timeseries: Any) -> TrajectoryGuess:
+        """The guess of a run log's ``timeseries.csv`` (a pandas DataFrame): the samples up to
+        the first standstill or reversal of the progress, where ``s`` still increases."""
+        s = timeseries["s_m"].to_numpy(dtype=float)
+        steps = np.diff(s) > 0.0
+        keep = len(s) if np.all(steps) else int(np.argmin(steps)) + 1
+        return cls(**{field: timeseries[column].to_numpy(dtype=float)[:keep]
+                      for field, column in _TIMESERIES_COLUMNS.items()})
+
+    def at(self, s_m: np.ndarray) -> dict[str, np.ndarray]:
+        """Each field at the progress ``s_m`` (linear; held beyond the ends, NaN slip as 0)."""
+        return {name: np.interp(s_m, self.s_m, np.nan_to_num(getattr(self, name)))
+                for name in _GUESS_FIELDS}
 
 
-def _rk4(ca, model, ds_m: float):
-    x, u, p = ca.MX.sym("x", 7), ca.MX.sym("u", 3), ca.MX.sym("p", 3)
-
-    def f(state):
-        return model(state, u, p)[0]
-
-    k1 = f(x)
-    k2 = f(x + 0.5 * ds_m * k1)
-    k3 = f(x + 0.5 * ds_m * k2)
-    k4 = f(x + ds_m * k3)
-    return ca.Function("rk4", [x, u, p], [x + ds_m / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)])
+_GUESS_FIELDS = tuple(f.name for f in fields(TrajectoryGuess) if f.name != "s_m")
+"""The fields of :class:`TrajectoryGuess` sampled along ``s_m``."""
 
 
 def _guess_speed_mps(curvature: np.ndarray, mu: np.ndarray, entry_speed_mps: float,
@@ -178,6 +174,8 @@ def least_lane_excursion(
     ds_m: float = 1.0,
     tires: tuple[TireParams, TireParams] | None = None,
     guess_shares: tuple[float, ...] = (0.8, 0.5),
+    guess: TrajectoryGuess | None = None,
+    max_utilization: float = 1.0,
     max_iter: int = 1500,
 ) -> TransientVerdict:
     """Solve for the least lane excursion from ``start_s_m`` to ``end_s_m`` on the true road.
@@ -196,8 +194,15 @@ def least_lane_excursion(
     ds_m
         Node spacing along the lane centre [m] (RK4 per interval).
     guess_shares
-        Initial guesses: the point mass's speed profile at these shares of μ g; the best
-        converged solve wins.
+        Initial guesses: the point mass's speed profile at these shares of the friction the
+        driver may use (``max_utilization`` μ g); the best converged solve wins.
+    guess
+        A trajectory to start from first (:class:`TrajectoryGuess`, e.g. the recorded run's);
+        the speed profiles follow unless it reaches ``E* = 0``.
+    max_utilization
+        The largest share of each axle's friction the driver may use, in (0, 1]: 1 is
+        physics; a planner's utilisation factor λ asks whether a driver with that reserve
+        could keep the lane (the reserve it keeps by design).
     max_iter
         IPOPT's iteration limit per solve.
 
@@ -214,6 +219,8 @@ def least_lane_excursion(
 
     require_positive("entry_speed_mps", entry_speed_mps)
     require_positive("ds_m", ds_m)
+    if not (isinstance(max_utilization, (int, float)) and 0.0 < max_utilization <= 1.0):
+        raise ValueError(f"max_utilization must be in (0, 1], got {max_utilization!r}")
     if not (math.isfinite(start_s_m) and 0.0 <= start_s_m):
         raise ValueError(f"start_s_m must be finite and >= 0, got {start_s_m!r}")
     if not (math.isfinite(end_s_m) and start_s_m + 10 * ds_m < end_s_m <= road.length_m):
@@ -225,8 +232,8 @@ def least_lane_excursion(
     curvature = np.asarray(road.curvature(s), dtype=float)
     mu_f = np.asarray(road.mu_at(s + params.cog_to_front_axle_m), dtype=float)
     mu_r = np.asarray(road.mu_at(s - params.cog_to_rear_axle_m), dtype=float)
-    model = _spatial_model(ca, params, tire_f, tire_r)
-    step = _rk4(ca, model, ds_m)
+    model = spatial_model(ca, params, tire_f, tire_r)
+    step = rk4_function(ca, model, ds_m)
     front_m, rear_m = params.cog_to_body_front_m, params.cog_to_body_rear_m
     half_w, half_lane = 0.5 * params.width_m, 0.5 * road.lane_width_m
     radius = params.wheel_radius_m
@@ -245,7 +252,10 @@ def least_lane_excursion(
     opti.subject_to(U[1:, 0] == 0.0)  # no force at the start: it builds through the lag
     step_map = step.map(n_nodes)
     opti.subject_to(X[:, 1:] == step_map(X[:, :-1], U[:, :-1], P[:, :-1]))
-    _, fx_f, fx_r = model.map(n_nodes + 1)(X, U, P)
+    _, fx_f, fx_r, util2_f, util2_r = model.map(n_nodes + 1)(X, U, P)
+    if max_utilization < 1.0:  # the driver keeps a reserve on both axles
+        opti.subject_to(util2_f <= max_utilization**2)
+        opti.subject_to(util2_r <= max_utilization**2)
     dt = X[6, 1:] - X[6, :-1]
     for fx, (lo, hi) in zip((fx_f, fx_r), fx_bounds, strict=True):
         # The command a first-order lag needs to move F_x from node k to k+1 in dt, times dt.
@@ -271,15 +281,34 @@ def least_lane_excursion(
                 {"print_level": 0, "sb": "yes", "max_iter": max_iter, "tol": 1e-8,
                  "acceptable_tol": 1e-6})
 
-    best: tuple[float, str, np.ndarray] | None = None
-    for share in guess_shares:
-        v = _guess_speed_mps(curvature, np.minimum(mu_f, mu_r), entry_speed_mps, ds_m, share)
+    def from_trajectory(trajectory: TrajectoryGuess) -> None:
+        at = trajectory.at(s)
+        opti.set_initial(X, np.vstack([
+            at["lateral_m"], at["heading_rad"], np.maximum(at["vx_mps"], MIN_SPEED_MPS),
+            at["vy_mps"], at["yaw_rate_radps"], at["steer_rad"], at["time_s"] - at["time_s"][0]]))
+        opti.set_initial(U, np.vstack([at["steer_cmd_rad"], np.clip(at["slip_front"], -0.5, 0.0),
+                                       np.clip(at["slip_rear"], -0.5, 0.5)]))
+
+    def from_speed_profile(share: float) -> None:
+        v = _guess_speed_mps(curvature, np.minimum(mu_f, mu_r), entry_speed_mps, ds_m,
+                             share * max_utilization)
         v[0] = entry_speed_mps
+        opti.set_initial(X, 0.0)
+        opti.set_initial(U, 0.0)
         opti.set_initial(X[2, :], v)
         opti.set_initial(X[4, :], v * curvature)
         opti.set_initial(X[5, :], params.wheelbase_m * curvature)
         opti.set_initial(U[0, :], params.wheelbase_m * curvature)
         opti.set_initial(X[6, :], np.concatenate([[0.0], np.cumsum(ds_m / v[:-1])]))
+
+    starts: list[tuple[str, Callable[[], None]]] = [
+        (f"point mass at {share:g} μ g", functools.partial(from_speed_profile, share))
+        for share in guess_shares]
+    if guess is not None:
+        starts.insert(0, ("trajectory", functools.partial(from_trajectory, guess)))
+    best: tuple[float, str, str, np.ndarray] | None = None
+    for label, start in starts:
+        start()
         opti.set_initial(excursion, 1.0)
         try:
             sol = opti.solve()
@@ -291,18 +320,18 @@ def least_lane_excursion(
             status, ok = str(stats.get("return_status", "failed")), False
             values, e_star = np.asarray(opti.debug.value(X)), math.inf
         if ok and (best is None or e_star < best[0]):
-            best = (e_star, status, values)
+            best = (e_star, status, label, values)
         elif best is None and not ok:
-            last_failed = (status, values)
+            last_failed = (status, label, values)
         if best is not None and best[0] <= EXCURSION_TOLERANCE_M:
-            break  # the body fits: a second guess cannot do better
+            break  # the body fits: another guess cannot do better
     if best is None:
-        status, values = last_failed
-        return _verdict(math.inf, False, status, s, values, curvature, front_m, rear_m,
+        status, label, values = last_failed
+        return _verdict(math.inf, False, status, label, s, values, curvature, front_m, rear_m,
                         half_w, half_lane)
-    e_star, status, values = best
-    return _verdict(max(e_star, 0.0), True, status, s, values, curvature, front_m, rear_m,
-                    half_w, half_lane)
+    e_star, status, label, values = best
+    return _verdict(max(e_star, 0.0), True, status, label, s, values, curvature, front_m,
+                    rear_m, half_w, half_lane)
 
 
 def _corner_offsets(ops, X, curvature, front_m, rear_m, half_w):
@@ -319,11 +348,12 @@ def _corner_offsets(ops, X, curvature, front_m, rear_m, half_w):
     return np.vstack(rows) if ops is np else ops.vertcat(*rows)
 
 
-def _verdict(e_star, converged, status, s, values, curvature, front_m, rear_m, half_w,
+def _verdict(e_star, converged, status, guess, s, values, curvature, front_m, rear_m, half_w,
              half_lane) -> TransientVerdict:
     corners = _corner_offsets(np, values, curvature, front_m, rear_m, half_w)
     beyond = np.max(np.abs(corners), axis=0) - half_lane
     return TransientVerdict(
-        excursion_m=e_star, converged=converged, status=status, s_m=s, time_s=values[6],
-        speed_mps=values[2], lateral_m=values[0], heading_rad=values[1], excursion_at_m=beyond,
+        excursion_m=e_star, converged=converged, status=status, guess=guess, s_m=s,
+        time_s=values[6], speed_mps=values[2], lateral_m=values[0], heading_rad=values[1],
+        excursion_at_m=beyond,
     )
