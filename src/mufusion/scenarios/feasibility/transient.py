@@ -219,7 +219,8 @@ def least_lane_excursion(
 
     require_positive("entry_speed_mps", entry_speed_mps)
     require_positive("ds_m", ds_m)
-    if not (isinstance(max_utilization, (int, float)) and 0.0 < max_utilization <= 1.0):
+    if isinstance(max_utilization, bool) or not (
+            isinstance(max_utilization, (int, float)) and 0.0 < max_utilization <= 1.0):
         raise ValueError(f"max_utilization must be in (0, 1], got {max_utilization!r}")
     if not (math.isfinite(start_s_m) and 0.0 <= start_s_m):
         raise ValueError(f"start_s_m must be finite and >= 0, got {start_s_m!r}")
@@ -302,7 +303,8 @@ def least_lane_excursion(
         opti.set_initial(X[6, :], np.concatenate([[0.0], np.cumsum(ds_m / v[:-1])]))
 
     starts: list[tuple[str, Callable[[], None]]] = [
-        (f"point mass at {share:g} μ g", functools.partial(from_speed_profile, share))
+        (f"point mass at {share * max_utilization:g} μ g",
+         functools.partial(from_speed_profile, share))
         for share in guess_shares]
     if guess is not None:
         starts.insert(0, ("trajectory", functools.partial(from_trajectory, guess)))
