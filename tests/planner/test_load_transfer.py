@@ -128,8 +128,10 @@ def test_the_rear_tires_keep_their_reserve_when_the_plans_count_their_load_trans
     # 11.2 cm) and only the tires show it. On the planner it was found on: with
     # the longitudinal forces lagging in the OCP (decision 0068) the counterfactual's rear
     # tires peak at 0.96, below saturation. The vehicle's ESC is off: its yaw moment on the
-    # swinging body (decision 0082) would mask the planner's mechanism measured here.
-    overrides = ["sim.esc=false", "initial_speed_mps=18", "friction.mu_turn=0.9",
+    # swinging body (decision 0082) would mask the planner's mechanism measured here, and so
+    # would the plans' saturated rear tire (0109), which sees the counterfactual's slide.
+    overrides = ["sim.esc=false", "planner.rear_saturation=false", "initial_speed_mps=18",
+                 "friction.mu_turn=0.9",
                  "turn.start_ahead_m=40", "turn.direction=right", "turn.clothoid_m=0",
                  "vehicle=truck",
                  "planner.reference_braking_fraction=1", "planner.reference_regain_limit=false",

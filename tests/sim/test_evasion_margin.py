@@ -15,9 +15,11 @@ from mufusion.sim.settings import LaneRecoverySettings
 
 # The car at 18 m/s on μ 0.35, an obstacle 22 m ahead, 0.3 m right of the lane centre: a stop
 # is out of reach (it needs μ 0.9), passing left fits (the oracle: feasible, +1.7 m/s), and GT
-# passes it 0.8 m clear. F-safe's μ̂ ahead is the class's lower bound, 0.1.
-_POPUP = ["friction.mu=0.35", "initial_speed_mps=18", "obstacle.distance_m=22",
-          "obstacle.lateral_offset_m=-0.3", "duration_s=2.0"]
+# passes it 0.8 m clear. F-safe's μ̂ ahead is the class's lower bound, 0.1. On the plans' linear
+# rear tire, where these were found: with the saturated one (decision 0109) both
+# counterfactuals below scrape past (by 6 and 2 mm) instead of hitting.
+_POPUP = ["planner.rear_saturation=false", "friction.mu=0.35", "initial_speed_mps=18",
+          "obstacle.distance_m=22", "obstacle.lateral_offset_m=-0.3", "duration_s=2.0"]
 
 
 def _run(*extra: str, vehicle: str = "car"):

@@ -78,6 +78,7 @@ def problem_hash(params: VehicleParams, config: PlannerConfig,
             "load_transfer": config.load_transfer,
             "torque_lag": config.torque_lag,
             "stability_envelope": config.stability_envelope, "heading_rows": config.heading_rows,
+            "rear_saturation": config.rear_saturation,
             "speed_ceiling": config.speed_ceiling,
             # The parameter vector's layout (planner/ocp.py's Param).
             "n_params": N_PARAMS,

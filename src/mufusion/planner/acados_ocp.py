@@ -25,7 +25,7 @@ from mufusion.planner.ocp import (
     polygon_rows,
     slack_penalties,
 )
-from mufusion.planner.ocp_state import force_rates, ocp_state, tire_forces
+from mufusion.planner.ocp_state import force_rates, ocp_rear_force_limit, ocp_state, tire_forces
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -78,14 +78,17 @@ def describe(
     model.xdot = ca.SX.sym("xdot", nx)
     # The tire forces: those that are states (planner/ocp_state.py), the inputs' otherwise.
     forces = tire_forces(x, u, layout)
+    rear_limit = ocp_rear_force_limit(p, forces, params, config)
     f = frenet_bicycle_dynamics(x[:N_STATES], forces, p[Param.curvature],
-                                ocp_rear_stiffness(p, forces, params, config.load_transfer), params)
+                                ocp_rear_stiffness(p, forces, params, config.load_transfer), params,
+                                rear_force_limit_n=rear_limit)
     f = ca.vertcat(f, *force_rates(x, u, layout))
     model.f_expl_expr = f
     model.f_impl_expr = model.xdot - f
     model.con_h_expr = constraint_expressions(x[:N_STATES], forces, p, params, ns,
                                              load_transfer=config.load_transfer,
-                                             heading=config.heading_rows)
+                                             heading=config.heading_rows,
+                                             rear_force_limit_n=rear_limit)
     ocp.model = model
     ocp.dims.N = n
     ocp.parameter_values = np.ones(N_PARAMS)

@@ -30,6 +30,7 @@ from mufusion.planner.ocp_state import (
     augmented_problem,
     cost_forces,
     force_rates,
+    ocp_rear_force_limit,
     ocp_state,
     plan_from_augmented,
     tire_forces,
@@ -69,7 +70,8 @@ class CasadiBackend:
         def f(xx):
             fs = forces(xx, u)
             dx = frenet_bicycle_dynamics(xx[:N_STATES], fs, p[Param.curvature], ocp_rear_stiffness(
-                p, fs, params, config.load_transfer), params)
+                p, fs, params, config.load_transfer), params,
+                rear_force_limit_n=ocp_rear_force_limit(p, fs, params, config))
             return ca.vertcat(dx, *force_rates(xx, u, layout))
 
         # As acados' ERK: stage_steps RK4 steps per stage (planner/integration.py).
@@ -85,7 +87,9 @@ class CasadiBackend:
         h = ca.Function("h", [x, u, p],
                         [constraint_expressions(x[:N_STATES], forces(x, u), p, params, ns,
                                                load_transfer=config.load_transfer,
-                                               heading=config.heading_rows)])
+                                               heading=config.heading_rows,
+                                               rear_force_limit_n=ocp_rear_force_limit(
+                                                   p, forces(x, u), params, config))])
 
         ny = N_STATES + N_INPUTS
         X = ca.SX.sym("X", nx, n + 1)

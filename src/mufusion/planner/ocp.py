@@ -82,9 +82,8 @@ MIN_LOAD_SHARE = 0.05
 
 
 def axle_loads_n(inputs: np.ndarray, params: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
-    """Axle loads ``(F_zf, F_zr)`` [N] per stage of the forces ``inputs (N, 3)``: pitch load
-    transfer of ``a_x = (F_xf + F_xr) / m``, each floored at :data:`MIN_LOAD_SHARE` of the
-    weight (what the polygons use)."""
+    """Axle loads ``(F_zf, F_zr)`` [N] per stage of ``inputs (N, 3)``: pitch load transfer of
+    ``a_x = (F_xf + F_xr) / m``, floored at :data:`MIN_LOAD_SHARE` of the weight (polygons')."""
     return floored_axle_loads_n(np.asarray(inputs, dtype=float).T, params,
                                 MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2)
 
@@ -285,7 +284,7 @@ def polygon_rows(n_sides: int, *, load_transfer: bool) -> PolygonRows:
 
 def constraint_expressions(
     x: Any, u: Any, p: Any, params: VehicleParams, n_sides: int, *, load_transfer: bool,
-    heading: bool = False,
+    heading: bool = False, rear_force_limit_n: Any = None,
 ) -> Any:
     """Friction polygons normalised by their radii, as CasADi rows (bounds: :func:`polygon_rows`),
     then, with ``heading``, the :data:`HEADING_ROWS` of :func:`~.corridor.heading_rows` (soft,
@@ -297,12 +296,15 @@ def constraint_expressions(
     ``n_j · f / R`` (``j < n/2``) within ``±cos(π/n)``; with it, each radius is ``λ μ̂ F_z`` at the
     loads of the stage's own ``F_xf + F_xr`` (linear in the forces, floored at 5 % of the weight
     as in :func:`stage_parameters`) and the ``n`` rows are ``(n_j · f − R(f)) / R ≤ 0``, divided
-    by the parameter radii.
+    by the parameter radii. ``rear_force_limit_n`` (``PlannerConfig.rear_saturation``): ``F_yr``
+    of the saturated rear tire at that friction (:func:`~mufusion.vehicle.rear_saturation.
+    rear_row_force_n`); ``None``: the linear tire's.
     """
     import casadi as ca
 
     normals, ratio = polygon_directions(n_sides)
-    fyr = rear_lateral_force_n(x, ocp_rear_stiffness(p, u, params, load_transfer), params)
+    fyr = rear_lateral_force_n(x, ocp_rear_stiffness(p, u, params, load_transfer), params,
+                               rear_force_limit_n)
     if not load_transfer:
         half = normals[: polygon_rows(n_sides, load_transfer=False).per_axle]
         front = [(nx * u[Input.fxf] + ny * u[Input.fyf]) / p[Param.radius_front]
@@ -312,10 +314,8 @@ def constraint_expressions(
     fzf, fzr = floored_axle_loads_n(u, params, MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2)
     limit_front = ratio * p[Param.utilized_friction] * fzf
     limit_rear = ratio * p[Param.utilized_friction] * fzr
-    front = [
-        (nx * u[Input.fxf] + ny * u[Input.fyf] - limit_front) / p[Param.radius_front]
-        for nx, ny in normals
-    ]
+    front = [(nx * u[Input.fxf] + ny * u[Input.fyf] - limit_front) / p[Param.radius_front]
+             for nx, ny in normals]
     rear = [(nx * u[Input.fxr] + ny * fyr - limit_rear) / p[Param.radius_rear]
             for nx, ny in normals]
     return ca.vertcat(*front, *rear, *(_heading_rows(x, p, params) if heading else ()))

@@ -222,3 +222,20 @@ def plan_from_augmented(xa: np.ndarray, ua: np.ndarray,
         i = layout.longitudinal
         us[:, [Input.fxf, Input.fxr]] = xa[:-1, i:i + 2]
     return np.array(xa[:, :N_STATES]), us
+
+
+def ocp_rear_force_limit(p: Any, forces: Any, params: VehicleParams,
+                         config: PlannerConfig) -> Any:
+    """The rear tire's friction ``μ̂ F_zr`` [N] of a stage (CasADi), where the plan's rear
+    lateral force saturates (``PlannerConfig.rear_saturation``; ``None`` without it, the
+    linear tire). ``μ̂`` is the stage's ``λ μ̂`` over ``λ``; ``F_zr`` the plan's own rear load
+    with ``load_transfer`` (as the polygons take it), the guess's without."""
+    if not config.rear_saturation:
+        return None
+    mu_hat = p[Param.utilized_friction] / config.utilization_factor
+    if config.load_transfer:
+        rear_load = floored_axle_loads_n(forces, params,
+                                         MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2)[1]
+    else:
+        rear_load = p[Param.radius_rear] / p[Param.utilized_friction]
+    return mu_hat * rear_load

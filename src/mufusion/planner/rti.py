@@ -205,7 +205,8 @@ def iterate(
             else:
                 reason, failed = judge_solution(xs, us, stage, d_lo, d_hi, par,
                                                 cfg.polygon_sides, cfg.plausibility,
-                                                load_transfer=cfg.load_transfer)
+                                                load_transfer=cfg.load_transfer,
+                                                rear_saturation=cfg.rear_saturation)
                 soft_only = bool(failed) and set(failed) <= SOFT_CHECKS
         except Exception as exc:  # never raise inside the loop
             _log.warning("planner backend raised %r", exc)

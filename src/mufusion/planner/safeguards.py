@@ -34,6 +34,7 @@ from mufusion.planner.ocp import (
     MU_MAX,
     MU_MIN,
     PlausibilityLimits,
+    axle_loads_n,
     longitudinal_force_bounds_n,
     plan_polygon_radii_n,
     plan_rear_stiffness,
@@ -143,6 +144,7 @@ class SanitizedFriction:
 def judged_rear_rows_n(
     states: np.ndarray, inputs: np.ndarray, stage: StageParameters,
     params: VehicleParams, normals: np.ndarray, *, load_transfer: bool,
+    rear_saturation: bool = False,
 ) -> np.ndarray:
     """The rear polygon's rows ``(n_sides, N)`` [N] of a solution as :func:`check_solution` judges
     them: ``normals @ (F_xr, F_yr)`` with the linear rear tire's ``F_yr`` at the plan's states,
@@ -156,7 +158,10 @@ def judged_rear_rows_n(
     us = np.asarray(inputs, dtype=float)
     stiffness = plan_rear_stiffness(stage.rear_stiffness_n_per_rad, stage.fzr_n, us.T, params,
                                     load_transfer)
-    fyr = rear_lateral_force_n(np.asarray(states)[:-1].T, stiffness, params)
+    limit = None
+    if rear_saturation:  # the dynamics' force (PlannerConfig.rear_saturation)
+        limit = stage.mu_hat * (axle_loads_n(us, params)[1] if load_transfer else stage.fzr_n)
+    fyr = rear_lateral_force_n(np.asarray(states)[:-1].T, stiffness, params, limit)
     fyr[0] = 0.0
     return normals @ np.stack([np.asarray(inputs)[:, Input.fxr], fyr])
 
@@ -172,6 +177,7 @@ def judge_solution(
     limits: PlausibilityLimits,
     *,
     load_transfer: bool,
+    rear_saturation: bool = False,
 ) -> tuple[FallbackReason, tuple[str, ...]]:
     """Whether a solution may be used, and the checks it fails.
 
@@ -206,7 +212,8 @@ def judge_solution(
     normals, ratio = polygon_directions(n_sides)
     radius_front, radius_rear = plan_polygon_radii_n(us, stage, params, load_transfer)
     front = normals @ np.stack([us[:, Input.fxf], us[:, Input.fyf]])
-    rear = judged_rear_rows_n(xs, us, stage, params, normals, load_transfer=load_transfer)
+    rear = judged_rear_rows_n(xs, us, stage, params, normals, load_transfer=load_transfer,
+                              rear_saturation=rear_saturation)
     lower, upper = longitudinal_force_bounds_n(params)
     slack = limits.force_bound_tolerance * np.maximum(np.abs(lower), np.abs(upper))
     fx = us[:, [Input.fxf, Input.fxr]]

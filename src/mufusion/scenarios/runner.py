@@ -84,6 +84,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         reference_curve_fraction=cfg.planner.reference_curve_fraction,
         speed_ceiling=cfg.planner.speed_ceiling,
         stability_envelope=cfg.planner.stability_envelope,
+        rear_saturation=cfg.planner.rear_saturation,
         heading_rows=cfg.planner.heading_rows,
         exact_body_reach=cfg.planner.exact_body_reach,
         lane_slack_lead=cfg.planner.lane_slack_lead,

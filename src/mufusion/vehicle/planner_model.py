@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from mufusion.vehicle.params import GRAVITY_MPS2, TireParams, VehicleParams
+from mufusion.vehicle.rear_saturation import rear_row_force_n, saturated_rear_force_n
 from mufusion.vehicle.surface_tires import SurfaceTireTable, tire_for_surface
 
 # Below this speed the slip-angle expression degenerates; the planner never plans slower than a
@@ -279,15 +280,19 @@ def _anchor_secant_factors(
     )
 
 
-def rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleParams) -> Any:
+def rear_lateral_force_n(x: Any, rear_stiffness_n_per_rad: Any, params: VehicleParams,
+                         limit_n: Any = None) -> Any:
     """Rear lateral tire force [N] of the planner's linear rear tire.
 
     ``F_yr = C_r (l_r ψ̇ − v_y) / max(v_x, 1 m/s)``; works on numpy arrays (``x`` of shape
-    ``(6, ...)``) and CasADi symbols.
+    ``(6, ...)``) and CasADi symbols. ``limit_n`` (> 0, broadcastable; the axle's friction): the
+    force the rear polygon prices with the saturated tire (:func:`rear_row_force_n`); ``None``
+    keeps it linear.
     """
-    return _rear_lateral_force_n(
+    fyr = _rear_lateral_force_n(
         x, rear_stiffness_n_per_rad, params, _ops(x, rear_stiffness_n_per_rad)[2]
     )
+    return fyr if limit_n is None else rear_row_force_n(fyr, x[_VX], limit_n)
 
 
 def floored_axle_loads_n(forces: Any, params: VehicleParams, floor_n: float) -> tuple[Any, Any]:
@@ -327,6 +332,7 @@ def frenet_bicycle_dynamics(
     rear_stiffness_n_per_rad: Any,
     params: VehicleParams,
     out: np.ndarray | None = None,
+    rear_force_limit_n: Any = None,
 ) -> Any:
     """Time derivative of the planner state.
 
@@ -345,6 +351,9 @@ def frenet_bicycle_dynamics(
     out
         Numpy only: array of the result's shape to write ``x_dot`` into (no allocation; the
         values are those of the call without it).
+    rear_force_limit_n
+        ``None``: the linear rear tire; else the rear lateral force is clipped to ± this
+        (:func:`rear_lateral_force_n`), the axle's friction ``μ̂ F_zr`` [N].
 
     Returns
     -------
@@ -372,6 +381,8 @@ def frenet_bicycle_dynamics(
     vx, vy = x[_VX], x[_VY]
     fyf, fxf, fxr = u[_FYF], u[_FXF], u[_FXR]
     fyr = _rear_lateral_force_n(x, rear_stiffness_n_per_rad, params, fmax)
+    if rear_force_limit_n is not None:
+        fyr = saturated_rear_force_n(fyr, vx, rear_force_limit_n)
     m = params.mass_kg
 
     sin_dpsi, cos_dpsi = sin(dpsi), cos(dpsi)
