@@ -110,15 +110,15 @@ def test_a_sliding_rear_is_not_braked(plans) -> None:
     assert np.all(np.abs(saturated.inputs[:2, Input.fxr]) < 0.2 * 0.3 * CAR.static_rear_load_n)
 
 
-def test_on_in_the_product_off_in_the_papers_method() -> None:
-    from mufusion.reproduction.variants import PAPER_METHOD
+def test_the_scenario_key_reaches_the_planner_and_off_is_the_linear_tire() -> None:
     from mufusion.scenarios import load_scenario
     from mufusion.scenarios.runner import planner_config
 
-    product = load_scenario("turn")
-    paper = load_scenario("turn", list(PAPER_METHOD))
-    assert planner_config(product, CAR).rear_saturation
-    assert not planner_config(paper, CAR).rear_saturation
+    assert not planner_config(load_scenario("turn"), CAR).rear_saturation
+    assert planner_config(load_scenario("turn", ["planner.rear_saturation=true"]),
+                          CAR).rear_saturation
+    with pytest.raises(ValueError, match="rear_saturation"):
+        load_scenario("turn", ["planner.rear_saturation=3"])
     # Off, the dynamics are the linear tire's, bit for bit.
     u = np.array([500.0, -800.0, 300.0])
     linear = frenet_bicycle_dynamics(SLIDING, u, -1.0 / 40.0, 1e5, CAR)

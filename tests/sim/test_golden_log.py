@@ -43,11 +43,10 @@ ATOL_OF_SCALE = {"plans": 1e-4}
 
 
 def _run():
-    # The paper's method: the recording predates the supervisory layers, the vehicle's ESC
-    # (on by default since docs/decisions/0082) and the plans' saturated rear tire (0109: the
-    # executed run is the same to 1e-7, the evasion plans' later stages are not).
+    # The paper's method: the recording predates the supervisory layers and the vehicle's ESC
+    # (on by default since docs/decisions/0082).
     overrides = ["duration_s=1.5", "probing.enabled=false", "lane_recovery.enabled=false",
-                 "sim.esc=false", "planner.rear_saturation=false"]
+                 "sim.esc=false"]
     return run_scenario(load_scenario("popup", overrides), "F")
 
 

@@ -200,8 +200,9 @@ class PlannerConfig:
     # The plan's linear rear tire clipped at the axle's friction μ̂ F_zr (vehicle/
     # rear_saturation.py, ``ocp_state.ocp_rear_force_limit``): a state sliding on the rear is
     # predicted to keep sliding, not to snap back on a force many times what the road holds.
-    # On by default, off in the paper's method (docs/decisions/0109).
-    rear_saturation: bool = True
+    # Off: measured, not adopted (GT's spins beyond the limit go, but on held-out grids GT and
+    # F-safe leave the lane in feasible variants they kept; docs/decisions/0109).
+    rear_saturation: bool = False
     # Keep the body's ends in the lane at the plan's own heading error (four soft rows per stage
     # in the OCP, linearised at each iterate) instead of taking the guess's heading swing, up to
     # 0.1 rad, off the reference point's bounds; not while evading (planner/corridor.py). Off:

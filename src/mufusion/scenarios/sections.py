@@ -183,8 +183,8 @@ class PlannerSettings(_Strict):
     :mod:`mufusion.planner.stability`, docs/decisions/0065)."""
     rear_saturation: bool = PlannerConfig.rear_saturation
     """The plans' linear rear tire clipped at the axle's friction μ̂ F_zr, so a rear that slides
-    is predicted to keep sliding; off: the linear tire of the authors' planner
-    (docs/decisions/0109)."""
+    is predicted to keep sliding; off (the default: measured, not adopted, docs/decisions/0109),
+    the linear tire of the authors' planner."""
     heading_rows: bool = PlannerConfig.heading_rows
     """Keep the body's ends in the lane at the plan's own heading error (two pairs of soft rows
     per stage in the OCP; :func:`mufusion.planner.corridor.heading_rows`); off (the default:
