@@ -147,8 +147,9 @@ def judged_rear_rows_n(
     rear_saturation: bool = False,
 ) -> np.ndarray:
     """The rear polygon's rows ``(n_sides, N)`` [N] of a solution as :func:`check_solution` judges
-    them: ``normals @ (F_xr, F_yr)`` with the linear rear tire's ``F_yr`` at the plan's states,
-    except at stage 0, where only the solver's ``F_xr`` counts.
+    them: ``normals @ (F_xr, F_yr)`` with the linear rear tire's ``F_yr`` at the plan's states
+    (with ``rear_saturation``, the saturated tire's as the OCP's rear rows price it,
+    docs/decisions/0109), except at stage 0, where only the solver's ``F_xr`` counts.
 
     Stage 0's rear lateral force is the measured state's: no solution can change it, and a
     vehicle whose rear slides puts it far outside the polygon (the linear tire). Judged there,
