@@ -182,3 +182,25 @@ def test_a_curves_imu_bias_does_not_read_braking_within_grip_as_a_lock(params) -
         speed -= rate * dt
     assert removed == 0.0
     assert worst_gap < 0.05  # the reference stays with the wheels (2.4 m/s above before)
+
+
+@pytest.mark.parametrize("params", [CAR, TRUCK], ids=["car", "truck"])
+@pytest.mark.parametrize("front_torque_nm", [-1e-9, -300.0], ids=["dust", "light-brake"])
+def test_traction_control_sees_a_spin_while_the_front_brakes(params, front_torque_nm) -> None:
+    # The plans may brake the front while they drive the rear, and a brake torque's lag leaves
+    # a tail (down to numerical dust, -1e-10 N m in limits_general's spinning car). While any
+    # torque brakes, the reference speed is the fastest wheel's; if that may be the driven one,
+    # a spinning rear wheel is its own reference, reads no slip, and traction control lets it
+    # run away (GT's rear wheel at 125 times the vehicle's speed there, docs/decisions/0110).
+    def launch(slip_control):
+        plant = Plant(params, initial_state(params, 0.0, 0.0, 0.0, 8.0),
+                      slip_control=slip_control)
+        command = ActuatorCommand(0.0, front_torque_nm, params.max_drive_torque_nm)
+        slips = [plant.step(command, 0.2, 0.2).rear.slip_ratio for _ in range(400)]
+        return np.array(slips)
+
+    spin = launch(None)
+    held = launch(SlipControlSettings())
+    assert spin[-100:].min() > 0.5  # the command spins the driven wheel
+    assert np.median(held[100:]) < 0.2  # as without the front's brake torque (the test above)
+    assert held.max() < 1.0

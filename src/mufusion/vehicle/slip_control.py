@@ -32,12 +32,14 @@ per axle, in four phases:
 
 Traction control is the same machine on drive torque with the signs mirrored (a spinning wheel
 instead of a locking one). The reference speed is the front wheel's while nothing brakes (neither
-preset drives its front axle, so it rolls freely). While braking it is the fastest wheel, falling
-no faster than the IMU's deceleration plus ``reference_decel_margin_mps2`` (the usual estimate on
-a rear-driven vehicle: a wheel that runs away towards lock falls far faster than that and leaves
-the reference behind). The margin matters: the IMU measures ``a_x = v̇_x − ψ̇ v_y``, and in a curve
-with body slip the term ``ψ̇ v_y`` (up to ``a_y β``, above 1 m/s² in a drift) makes the integrated
-IMU decelerate slower than the vehicle. An estimate that may only fall with the IMU then drifts
+preset drives its front axle, so it rolls freely). While braking it is the fastest wheel that no
+drive torque turns, falling no faster than the IMU's deceleration plus
+``reference_decel_margin_mps2`` (the usual estimate on a rear-driven vehicle: a wheel that runs
+away towards lock falls far faster than that and leaves the reference behind; a driven wheel may
+spin, and as its own reference it would hide the spin from traction control). The margin
+matters: the IMU measures ``a_x = v̇_x − ψ̇ v_y``, and in a curve with body slip the term
+``ψ̇ v_y`` (up to ``a_y β``, above 1 m/s² in a drift) makes the integrated IMU decelerate slower
+than the vehicle. An estimate that may only fall with the IMU then drifts
 above the wheels while they brake within their grip, reads their slip as a lock and dumps a brake
 torque the road could take (docs/decisions/0080).
 
@@ -312,7 +314,15 @@ class WheelSlipController:
                           or self._rear.phase is not SlipPhase.PASS)
             margin = 0.0 if controlled else cfg.reference_decel_margin_mps2
             floor = self.reference_speed_mps + (accel_x_mps2 - margin) * dt
-            reference = max(floor, wheel_f, wheel_r)
+            # Only a wheel that no drive torque turns witnesses the vehicle's speed: the plans
+            # may brake the front while they drive the rear (or a brake's lag leaves a tail),
+            # and a spinning rear wheel taken as the reference reads no slip of its own, so
+            # traction control let it run away (docs/decisions/0110).
+            reference = floor
+            if wheel_f > reference and asked_f <= 0.0 and torque_front_nm <= 0.0:
+                reference = wheel_f
+            if wheel_r > reference and asked_r <= 0.0 and torque_rear_nm <= 0.0:
+                reference = wheel_r
         else:
             reference = wheel_f  # the undriven front wheel rolls freely
         self.reference_speed_mps = reference
