@@ -204,3 +204,34 @@ def test_traction_control_sees_a_spin_while_the_front_brakes(params, front_torqu
     assert spin[-100:].min() > 0.5  # the command spins the driven wheel
     assert np.median(held[100:]) < 0.2  # as without the front's brake torque (the test above)
     assert held.max() < 1.0
+
+
+def test_a_front_wheel_at_full_lock_is_read_in_its_own_plane_and_keeps_its_brake() -> None:
+    # Skidding at full steering lock (a minimal-risk stop beyond the limit), the front wheel
+    # rolls along its own plane at v cos δ, about half the body's speed for the car (1.07 rad):
+    # read as the body's speed it looked locked, its brake was dumped at once, and since the
+    # torque "that locked it" was none, the reapply never built it up again (limits_turn: 1 s
+    # and more in 60 runs, docs/decisions/0111). The truck's lock (0.6 rad) reads 17.5 %, below
+    # the release threshold without a runaway.
+    from mufusion.vehicle.slip_control import WheelSlipController
+
+    params = CAR
+    dt, radius = 0.005, params.wheel_radius_m
+    steer, yaw_rate, decel = params.max_steer_rad, 0.1, 0.8
+    brake = -0.3 * params.max_brake_torque_front_nm
+
+    def run(steer_seen: float) -> float:
+        control = WheelSlipController(params, SlipControlSettings(), dt, 8.0)
+        speed, removed = 8.0, 0.0
+        for step in range(round(1.0 / dt)):
+            in_plane = (speed * math.cos(steer)
+                        + params.cog_to_front_axle_m * yaw_rate * math.sin(steer))
+            _cmd, status = control.modulate(
+                (steer, brake, brake), in_plane / radius, speed / radius, -decel,
+                brake, brake, step * dt, steer_seen, yaw_rate)
+            removed = max(removed, status.front.torque_removed_nm)
+            speed -= decel * dt
+        return removed
+
+    assert run(steer) == 0.0  # the rolling wheel keeps its brake torque
+    assert run(0.0) == pytest.approx(-brake)  # read without the steering: dumped throughout

@@ -346,7 +346,7 @@ class Plant:
         if self._slip_control is not None:
             cmd, slip_status = self._slip_control.modulate(
                 cmd, omega_f0, omega_r0, self._accel_x_mps2, x0.torque_front_nm,
-                x0.torque_rear_nm, self.time_s,
+                x0.torque_rear_nm, self.time_s, x0.steer_rad, x0.yaw_rate_radps,
             )
         yaw_moment = force_x = 0.0
         if self._esc is not None:

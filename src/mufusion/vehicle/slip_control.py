@@ -178,6 +178,10 @@ class SlipControlStatus:
 
 PASSIVE_AXLE = AxleSlipStatus(SlipPhase.PASS, 0.0, 0.0)
 
+_MIN_STEER_COS = 0.2
+"""Floor of cos δ when the front wheel's speed is read as the body's (δ ≤ 1.37 rad; no preset
+steers beyond 1.07)."""
+
 
 class _AxleMachine:
     """One axle's phase machine on torque magnitudes (brake or drive, signs taken off)."""
@@ -287,6 +291,8 @@ class WheelSlipController:
         torque_front_nm: float,
         torque_rear_nm: float,
         time_s: float,
+        steer_rad: float = 0.0,
+        yaw_rate_radps: float = 0.0,
     ) -> tuple[tuple[float, float, float], SlipControlStatus]:
         """The command the wheels get in the coming plant step, and what was done to it.
 
@@ -302,10 +308,20 @@ class WheelSlipController:
             Torques the actuators apply now [N m] (brake pressure, drive torque).
         time_s
             The plant's clock [s].
+        steer_rad, yaw_rate_radps
+            The front wheels' steering angle and the yaw rate (the steering-angle sensor and
+            the gyro every ESC unit has) [rad], [rad/s].
         """
         radius, dt, cfg = self.params.wheel_radius_m, self.dt_s, self.settings
         steer, asked_f, asked_r = command
-        wheel_f, wheel_r = radius * omega_front_radps, radius * omega_rear_radps
+        # The steered front wheel rolls along its own plane, at v_x cos δ + (v_y + l_f ψ̇) sin δ:
+        # read as the body's speed (v_y unknown, taken as 0). Uncorrected, a wheel at full lock
+        # in a skid rolls at half the body's speed, reads as locked, and its brake was dumped
+        # and never reapplied (the torque "that locked it" was none; docs/decisions/0111).
+        wheel_f = ((radius * omega_front_radps
+                    - self.params.cog_to_front_axle_m * yaw_rate_radps * math.sin(steer_rad))
+                   / max(math.cos(steer_rad), _MIN_STEER_COS))
+        wheel_r = radius * omega_rear_radps
         braking = asked_f < 0.0 or asked_r < 0.0 or torque_front_nm < 0.0 or torque_rear_nm < 0.0
         if braking:
             # While a wheel is modulated no wheel need roll at the vehicle's speed: the IMU
