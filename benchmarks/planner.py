@@ -110,9 +110,10 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
     x = model.set_variable("_x", "x", shape=(6, 1))
     u = model.set_variable("_u", "u", shape=(3, 1))
     tvp = {name: model.set_variable("_tvp", name) for name in
-           ("kappa", "c_r", "r_f", "r_r", "lam_mu", "d_lo", "d_hi")}
-    # In Param's order.
-    p = ca.vertcat(tvp["kappa"], tvp["c_r"], tvp["r_f"], tvp["r_r"], tvp["lam_mu"])
+           ("kappa", "c_r", "r_f", "r_r", "lam_mu", "lam_mu_f", "d_lo", "d_hi")}
+    # In Param's order (the heading rows' lane bounds unused: no heading rows here).
+    p = ca.vertcat(tvp["kappa"], tvp["c_r"], tvp["r_f"], tvp["r_r"], tvp["lam_mu"], 0.0, 0.0,
+                   tvp["lam_mu_f"])
 
     def f(xx):
         return frenet_bicycle_dynamics(xx, u, tvp["kappa"], tvp["c_r"], TRUCK)
@@ -165,7 +166,8 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
         guess = np.tile(x0, (n + 1, 1))
         guess[:, State.s] = x0[State.s] + np.arange(n + 1) * dt * x0[State.vx]
         stage = stage_parameters(guess, np.zeros((n, 3)), curvature, mu_hat, TRUCK,
-                                 config.utilization_factor)
+                                 config.utilization_factor,
+                                 front_axle=config.front_axle_polygon)
         lo, hi = lateral_corridor(guess, [], LANE[0], LANE[1], TRUCK, 0.5)
         for k in range(n + 1):
             kk = min(k, n - 1)
@@ -174,6 +176,7 @@ def run_dompc(config: PlannerConfig) -> np.ndarray:
             template["_tvp", k, "r_f"] = stage.p[kk, Param.radius_front]
             template["_tvp", k, "r_r"] = stage.p[kk, Param.radius_rear]
             template["_tvp", k, "lam_mu"] = stage.p[kk, Param.utilized_friction]
+            template["_tvp", k, "lam_mu_f"] = stage.p[kk, Param.utilized_friction_front]
             template["_tvp", k, "d_lo"] = lo[kk]
             template["_tvp", k, "d_hi"] = hi[kk]
         return template

@@ -18,6 +18,7 @@ def cruise_problem(cfg: PlannerConfig, speed_mps: float, mu: float):
     guess_x[:, State.s] = speed_mps * cfg.dt_s * np.arange(n + 1)
     p = np.zeros((n, len(Param)))
     p[:, Param.utilized_friction] = cfg.utilization_factor * mu
+    p[:, Param.utilized_friction_front] = p[:, Param.utilized_friction]
     p[:, Param.radius_front] = p[:, Param.radius_rear] = mu * TRUCK.mass_kg * GRAVITY_MPS2
     guess_load = p[:, Param.radius_rear] / p[:, Param.utilized_friction]
     p[:, Param.rear_stiffness] = 3e5 * guess_load / normal_loads_n(0.0, TRUCK)[1]

@@ -1,9 +1,15 @@
-"""The front braking bounded where the front brake torque lands (docs/decisions/0063)."""
+"""The friction under the axles: the polygons at the lowest μ̂ from the rear axle to the front
+one (docs/decisions/0112), the front braking bounded where its torque lands (0063, 0064)."""
 
 import numpy as np
 import pytest
 
-from mufusion.planner.ocp import front_brake_limit_n, polygon_directions, stage_parameters
+from mufusion.planner.ocp import (
+    Param,
+    front_brake_limit_n,
+    polygon_directions,
+    stage_parameters,
+)
 from mufusion.vehicle.params import TRUCK
 from mufusion.vehicle.planner_model import N_INPUTS, N_STATES, Input, State, normal_loads_n
 
@@ -43,6 +49,53 @@ def test_the_front_braking_is_bounded_past_a_drop_the_cog_has_not_reached():
     # Without the lag: no bound beyond the polygon anywhere.
     plain = stage_parameters(xs, us, _flat, _drop_at(100.0), TRUCK, LAMBDA)
     assert np.all(np.isinf(plain.front_brake_limit_n))
+
+
+def test_the_front_polygon_takes_the_friction_under_the_front_axle():
+    lf = TRUCK.cog_to_front_axle_m
+    # A drop 0.5 m behind the front axle: the CoG is still on μ 0.9, the front tires are not.
+    xs, us = _guess(100.0 - lf + 0.5, 1.0, n=4)
+    assert np.all(xs[:-1, State.s] < 100.0)
+    drop = stage_parameters(xs, us, _flat, _drop_at(100.0), TRUCK, LAMBDA, front_axle=True)
+    np.testing.assert_allclose(drop.mu_hat_front, 0.3)
+    np.testing.assert_allclose(drop.radius_front_n, LAMBDA * 0.3 * drop.fzf_n)
+    np.testing.assert_allclose(drop.p[:, Param.utilized_friction_front], LAMBDA * 0.3)
+    # The rear polygon keeps the CoG's μ̂ (the road behind it is not read, 0099).
+    np.testing.assert_allclose(drop.mu_hat, 0.9)
+    np.testing.assert_allclose(drop.radius_rear_n, LAMBDA * 0.9 * drop.fzr_n)
+    np.testing.assert_allclose(drop.utilized_friction, LAMBDA * 0.9)
+    # The paper's planner: both polygons at the CoG's μ̂.
+    paper = stage_parameters(xs, us, _flat, _drop_at(100.0), TRUCK, LAMBDA)
+    np.testing.assert_allclose(paper.mu_hat_front, 0.9)
+    np.testing.assert_allclose(paper.radius_front_n, LAMBDA * 0.9 * paper.fzf_n)
+    # A rise ahead of the front axle: the lower, the CoG's, holds for both.
+    rise = stage_parameters(xs, us, _flat, lambda s: np.where(np.asarray(s) < 100.0, 0.3, 0.9),
+                            TRUCK, LAMBDA, front_axle=True)
+    np.testing.assert_allclose(rise.mu_hat_front, 0.3)
+
+
+def test_the_ocps_front_rows_read_the_front_axles_friction_and_the_rear_rows_the_cogs():
+    """The OCP's rows (CasADi, load transfer on): forces that fit μ̂ 0.9 but not 0.3 on both
+    axles violate the front rows only, where the front axle is past the drop."""
+    import casadi as ca
+
+    from mufusion.planner.ocp import constraint_expressions
+
+    xs, us = _guess(100.0 - TRUCK.cog_to_front_axle_m + 0.5, 10.0, n=1)
+    stage = stage_parameters(xs, us, _flat, _drop_at(100.0), TRUCK, LAMBDA, front_axle=True)
+    x, u, p = ca.SX.sym("x", N_STATES), ca.SX.sym("u", N_INPUTS), ca.SX.sym("p", stage.p.shape[1])
+    rows = ca.Function("rows", [x, u, p],
+                       [constraint_expressions(x, u, p, TRUCK, 12, load_transfer=True)])
+    static_front, static_rear = normal_loads_n(0.0, TRUCK)
+    inputs = np.zeros(N_INPUTS)
+    inputs[Input.fyf] = 0.4 * static_front  # μ 0.3's polygon holds 0.26 of the load
+    inputs[Input.fxr] = -0.4 * static_rear
+    values = np.asarray(rows(xs[0], inputs, stage.p[0])).ravel()
+    assert values[:12].max() > 0.0
+    assert values[12:24].max() < 0.0
+    # The paper's planner (both at the CoG's 0.9): no row binds.
+    paper = stage_parameters(xs, us, _flat, _drop_at(100.0), TRUCK, LAMBDA)
+    assert np.asarray(rows(xs[0], inputs, paper.p[0])).max() < 0.0
 
 
 def test_no_bound_where_the_front_axle_meets_the_stages_own_friction():
@@ -85,3 +138,22 @@ def test_the_backend_holds_the_plan_within_the_bound():
     assert status in (0, 2)
     assert free[:, Input.fxf].min() < -2.0 * 5e3
     assert bounded[:, Input.fxf].min() >= -5e3 - 1e-3
+
+
+@pytest.mark.slow
+def test_gt_keeps_its_lane_where_the_drop_reached_its_front_tires_first() -> None:
+    # limits_general's variant 156 (the car at 19 m/s, μ 0.9 dropping to 0.3 10 m ahead, a
+    # 40 m quarter turn 20 m ahead): with the front polygon at the centre of gravity's μ̂ GT
+    # spun and ended 3.95 m out (tests/planner/test_rear_saturation.py); at the front axle's it
+    # keeps its lane.
+    from mufusion.metrics import compute_metrics
+    from mufusion.scenarios import load_scenario
+    from mufusion.scenarios.runner import run_scenario
+
+    overrides = ["vehicle=car", "initial_speed_mps=19", "duration_s=10", "turn.radius_m=40",
+                 "turn.angle_rad=1.5708", "turn.start_ahead_m=20", "turn.clothoid_m=5",
+                 "turn.direction=left", "friction.mu_before=0.9", "friction.mu_turn=0.3",
+                 "friction.change_ahead_m=10"]
+    metrics = compute_metrics(run_scenario(load_scenario("turn", overrides), "GT"))
+    assert not metrics.spun and not metrics.minimal_risk
+    assert metrics.max_lane_excursion_m == 0.0

@@ -49,7 +49,7 @@ def test_layout_follows_the_switches(rate, lag, nx, front, longitudinal):
 def _stage_params(radius_n: float, utilized_friction: float = 1.0) -> np.ndarray:
     p = np.ones((N + 1, len(Param)))
     p[:, Param.radius_front] = radius_n
-    p[:, Param.utilized_friction] = utilized_friction
+    p[:, Param.utilized_friction] = p[:, Param.utilized_friction_front] = utilized_friction
     return p
 
 

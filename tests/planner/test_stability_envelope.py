@@ -27,6 +27,7 @@ def _problem(cfg: PlannerConfig, mu_hat: np.ndarray, speed_mps: np.ndarray):
     guess_x[:, State.vx] = speed_mps
     p = np.zeros((n, len(Param)))
     p[:, Param.utilized_friction] = cfg.utilization_factor * mu_hat
+    p[:, Param.utilized_friction_front] = p[:, Param.utilized_friction]
     return guess_x, p
 
 

@@ -193,6 +193,9 @@ class PlannerConfig:
     # Each stage's front braking also bounded by the lowest μ̂ under the front axle from the
     # stage's start to one torque lag later, where it is below the stage's (docs/decisions/0064).
     axle_friction: bool = True
+    # The front polygon at the lower μ̂ of the centre of gravity's and the front axle's: the
+    # front tires meet a drop l_f earlier; the rear keeps the CoG's (docs/decisions/0112).
+    front_axle_polygon: bool = True
     # Each stage's yaw rate bounded (soft) by μ̂ g / v at the guess's speed, with a margin
     # and body slip by 0.02 μ̂ g (planner/stability.py; issue 38, mechanism B; both backends;
     # on: GT 0.28-0.30 m out there where main is 0.33-0.39 m, docs/decisions/0065).

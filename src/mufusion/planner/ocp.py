@@ -29,6 +29,7 @@ from mufusion.planner.corridor import lateral_corridor as lateral_corridor
 from mufusion.planner.penalties import SlackPenalties as SlackPenalties
 from mufusion.planner.penalties import slack_penalties as slack_penalties
 from mufusion.planner.plan import StageParameters
+from mufusion.planner.under_axles import lowest_ahead
 from mufusion.vehicle.params import GRAVITY_MPS2, VehicleParams
 from mufusion.vehicle.planner_model import (
     N_INPUTS,
@@ -64,6 +65,9 @@ class Param(IntEnum):
     # within them (corridor.heading_rows); ±HEADING_ROWS_OFF_M leaves the rows slack.
     lane_lo = 5
     lane_hi = 6
+    # λ μ̂ of the front polygon: the lower of the CoG's μ̂ and the front axle's, where the front
+    # tires are (docs/decisions/0112); the rear polygon keeps ``utilized_friction``.
+    utilized_friction_front = 7
 
 
 N_PARAMS = len(Param)
@@ -121,15 +125,18 @@ def stage_parameters(
     stiffness_table: SurfaceTireTable | None = None,
     axle_lag_s: float | None = None,
     polygon_sides: int = 12,
+    front_axle: bool = False,
 ) -> StageParameters:
     """Per-stage parameters from the initial guess (predicted ``s_k`` and ``a_x,k``).
 
     ``stiffness_table``: ``None`` keeps the rear stiffness of the vehicle's tire; a table makes
     it follow each stage's μ̂ (``PlannerConfig.stiffness = "from_mu_hat"``).
-    ``axle_lag_s``: ``None`` bounds the front braking by the polygon only (the centre of
-    gravity's μ̂ at ``s_k``); a torque lag [s] also bounds it where the front axle meets a lower
-    μ̂ than the stage's between the stage's start and where a brake torque commanded then lands
-    (``v_k`` times the lag further, :func:`axle_friction`): at the polygon's braking face at that
+    Both polygons take μ̂ at the centre of gravity's ``s_k``; with ``front_axle`` the front
+    polygon takes the lower of that and the front axle's (``mu_hat_front``).
+    ``axle_lag_s``: ``None`` bounds the front braking by the polygon only; a torque lag [s]
+    also bounds it where the front axle meets a lower μ̂ than the front polygon's between the
+    stage's start and where a brake torque commanded then lands (``v_k`` times the lag further,
+    :func:`~mufusion.planner.under_axles.lowest_ahead`): at the polygon's braking face at that
     μ̂ (:func:`front_brake_limit_n`; ``inf`` elsewhere).
 
     Returns a :class:`StageParameters`: arrays of length N and the stacked ``p``.
@@ -139,17 +146,22 @@ def stage_parameters(
     axle = None
     if axle_lag_s is not None:
         reach = np.maximum(guess_states[:-1, State.vx], 0.0) * axle_lag_s
-        axle = axle_friction(mu_hat_of_s, s_k + params.cog_to_front_axle_m, reach)
-    # The stages' own query last: a sanitising μ̂ (planner/safeguards.py) counts the values it
-    # replaced in its latest query, and the plan reports that count for its stages.
-    mu = mu_brake = _clipped_mu(mu_hat_of_s(s_k))
+        axle = _clipped_mu(lowest_ahead(mu_hat_of_s, s_k + params.cog_to_front_axle_m, reach))
+    # The front tires meet a drop l_f before the CoG: the front polygon takes the lower of the
+    # two μ̂ (docs/decisions/0112); the rear keeps the CoG's (the road behind it is a record
+    # that a safe-mode estimate leaves stale, 0099). The stages' own query last: a sanitising
+    # μ̂ (planner/safeguards.py) counts the values it replaced in its latest query, and the
+    # plan reports that count for its stages.
+    front = _clipped_mu(mu_hat_of_s(s_k + params.cog_to_front_axle_m)) if front_axle else np.inf
+    mu = _clipped_mu(mu_hat_of_s(s_k))
+    mu_front = mu_brake = np.minimum(front, mu)
     if axle is not None:
-        mu_brake = np.minimum(mu, axle)
+        mu_brake = np.minimum(mu_front, axle)
     kappa = np.asarray(curvature_of_s(s_k), dtype=float) * np.ones_like(s_k)
     c_r = rear_cornering_stiffness_n_per_rad(
         params, fzr, utilization_factor, mu_hat=mu, table=stiffness_table
     )
-    radius_front = utilization_factor * mu * fzf
+    radius_front = utilization_factor * mu_front * fzf
     radius_rear = utilization_factor * mu * fzr
     p = np.zeros((s_k.size, N_PARAMS))
     p[:, Param.curvature] = kappa
@@ -158,15 +170,16 @@ def stage_parameters(
     p[:, Param.radius_rear] = radius_rear
     utilized = utilization_factor * mu
     p[:, Param.utilized_friction] = utilized
+    p[:, Param.utilized_friction_front] = utilization_factor * mu_front
     p[:, Param.lane_lo], p[:, Param.lane_hi] = -HEADING_ROWS_OFF_M, HEADING_ROWS_OFF_M
     brake = np.full(s_k.shape, np.inf)
-    lower = mu_brake < mu
+    lower = mu_brake < mu_front
     if np.any(lower):
         brake[lower] = front_brake_limit_n(
             polygon_directions(polygon_sides)[1] * utilization_factor * mu_brake[lower],
             np.asarray(guess_inputs, dtype=float)[lower, Input.fxr], params)
     return StageParameters(mu, fzf, fzr, radius_front, radius_rear, utilized, c_r, kappa, p,
-                           mu_brake, brake)
+                           mu_brake, brake, mu_front)
 
 
 def front_brake_limit_n(
@@ -185,27 +198,6 @@ def _clipped_mu(mu: Any) -> np.ndarray:
     """μ̂ clipped to [:data:`MU_MIN`, :data:`MU_MAX`]."""
     # np.minimum(np.maximum(...)): np.clip's values (non-zero bounds) at less overhead.
     return np.minimum(np.maximum(np.asarray(mu, dtype=float), MU_MIN), MU_MAX)
-
-
-def axle_friction(mu_hat_of_s, axle_s_m: np.ndarray, reach_m: np.ndarray) -> np.ndarray:
-    """The lowest μ̂ an axle meets from ``axle_s_m`` to ``reach_m`` further (at both ends and
-    the middle), clipped like the stages' μ̂.
-
-    Where the friction drops, a stage's forces act on the axles, not at the centre of gravity,
-    and the wheel torques follow their command with a lag: braking planned at the CoG's μ̂ with
-    the front axle just short of a drop lands on the low friction (docs/decisions/0064).
-
-    Examples
-    --------
-    >>> mu = lambda s: np.where(np.asarray(s) < 10.0, 0.9, 0.3)
-    >>> axle_friction(mu, np.array([8.0, 9.5]), np.array([1.0, 1.0])).tolist()
-    [0.9, 0.3]
-    """
-    s = np.asarray(axle_s_m, dtype=float)
-    reach = np.asarray(reach_m, dtype=float)
-    lowest = np.minimum(np.minimum(mu_hat_of_s(s), mu_hat_of_s(s + 0.5 * reach)),
-                        mu_hat_of_s(s + reach))
-    return _clipped_mu(lowest)
 
 
 def plan_rear_stiffness(c_r: Any, guess_rear_load_n: Any, forces: Any, params: VehicleParams,
@@ -237,7 +229,7 @@ def plan_polygon_radii_n(
     if not load_transfer:
         return stage.radius_front_n, stage.radius_rear_n
     fzf, fzr = axle_loads_n(inputs, params)
-    return stage.utilized_friction * fzf, stage.utilized_friction * fzr
+    return stage.p[:, Param.utilized_friction_front] * fzf, stage.utilized_friction * fzr
 
 
 @dataclass(frozen=True)
@@ -312,7 +304,7 @@ def constraint_expressions(
         rear = [(nx * u[Input.fxr] + ny * fyr) / p[Param.radius_rear] for nx, ny in half]
         return ca.vertcat(*front, *rear, *(_heading_rows(x, p, params) if heading else ()))
     fzf, fzr = floored_axle_loads_n(u, params, MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2)
-    limit_front = ratio * p[Param.utilized_friction] * fzf
+    limit_front = ratio * p[Param.utilized_friction_front] * fzf
     limit_rear = ratio * p[Param.utilized_friction] * fzr
     front = [(nx * u[Input.fxf] + ny * u[Input.fyf] - limit_front) / p[Param.radius_front]
              for nx, ny in normals]

@@ -130,7 +130,7 @@ def initial_forces(forces: np.ndarray, p0: np.ndarray, params: VehicleParams,
     floor = MIN_LOAD_SHARE * params.mass_kg * GRAVITY_MPS2
     for _ in range(8):
         if config.load_transfer:
-            radius = float(p0[Param.utilized_friction]) * float(
+            radius = float(p0[Param.utilized_friction_front]) * float(
                 floored_axle_loads_n(out, params, floor)[0])
         else:
             radius = float(p0[Param.radius_front])

@@ -80,3 +80,5 @@ class StageParameters:
     mu_hat_front_brake: np.ndarray
     # The front braking's bound per stage [N] at that μ̂ (``inf`` where it is the stage's own).
     front_brake_limit_n: np.ndarray
+    # The front polygon's μ̂: the lower of ``mu_hat`` (the CoG's) and the front axle's.
+    mu_hat_front: np.ndarray

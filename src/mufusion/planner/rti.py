@@ -165,7 +165,7 @@ def iterate(
         stage = stage_parameters(guess_x, guess_u, curvature_of_s, mu_of_s, par,
                                  cfg.utilization_factor, cfg.stiffness_table,
                                  par.torque_time_constant_s if cfg.axle_friction else None,
-                                 cfg.polygon_sides)
+                                 cfg.polygon_sides, cfg.front_axle_polygon)
         kappa = curvature_of_s(guess_x[1:, State.s])
         p = stage.p
         if cfg.heading_rows and mode != "evade":
@@ -283,7 +283,7 @@ def held_plan(par: VehicleParams, cfg: PlannerConfig, problem: StepProblem, t_s:
                                   problem.mu_of_s, par, cfg, sampling)
     stage = stage_parameters(xs, us, problem.curvature_of_s, problem.mu_of_s, par,
                              cfg.utilization_factor, cfg.stiffness_table, None,
-                             cfg.polygon_sides)
+                             cfg.polygon_sides, cfg.front_axle_polygon)
     held = Iterated(xs, us, xs, us, stage, 0, FallbackReason.NONE, False)
     return replace(plan_of(par, cfg, problem, held, (xs, us), t_s, started, False, 0),
                    held=True)

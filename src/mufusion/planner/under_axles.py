@@ -68,3 +68,22 @@ def sharpest_under_axles(
         return np.take_along_axis(candidates, np.abs(candidates).argmax(axis=0)[None], 0)[0]
 
     return sharpest
+
+
+def lowest_ahead(mu_hat_of_s: Callable[[np.ndarray], np.ndarray], s_m: np.ndarray,
+                 reach_m: np.ndarray) -> np.ndarray:
+    """The lowest μ̂ from each ``s_m`` to ``reach_m`` further [m] (at both ends and the middle).
+
+    For the front axle over one torque lag: braking planned at the polygons' μ̂ with the front
+    axle just short of a drop lands on the low friction (docs/decisions/0064).
+
+    Examples
+    --------
+    >>> mu = lambda s: np.where(np.asarray(s) < 10.0, 0.9, 0.3)
+    >>> lowest_ahead(mu, np.array([8.0, 9.5]), np.array([1.0, 1.0])).tolist()
+    [0.9, 0.3]
+    """
+    s = np.asarray(s_m, dtype=float)
+    reach = np.asarray(reach_m, dtype=float)
+    return np.minimum(np.minimum(mu_hat_of_s(s), mu_hat_of_s(s + 0.5 * reach)),
+                      mu_hat_of_s(s + reach))

@@ -165,7 +165,7 @@ PAPER_METHOD: tuple[str, ...] = (
     "probing.enabled=false", "lane_recovery.enabled=false", "planner.curve_speed_reference=false",
     "planner.brake_first=false", "planner.steering_rate_limit=false",
     "sim.torque_compensation=false", "planner.load_transfer=false",
-    "planner.torque_lag=false", "sim.esc=false",
+    "planner.torque_lag=false", "planner.front_axle_polygon=false", "sim.esc=false",
 )
 """The paper's method: a planner that tracks the cruise speed (TAMP), without our additions that
 go beyond it: the vehicle's yaw stability control, which the authors' plant did not have
@@ -176,8 +176,9 @@ body's fit (:mod:`mufusion.planner.body_fit`), stopping in front
 of an obstacle where possible (:mod:`mufusion.sim.obstacle_response`) and plans whose front
 force changes no faster than the steering can turn (:mod:`mufusion.planner.front_force`),
 longitudinal forces that follow the torques' lag and axle loads that follow the plan's own
-forces (:mod:`mufusion.planner.ocp_state`), and wheel torques commanded ahead of the brakes' lag
-(:class:`mufusion.planner.controller.ControllerGains`)."""
+forces (:mod:`mufusion.planner.ocp_state`), a front friction polygon at the friction under the
+front axle (:func:`mufusion.planner.ocp.stage_parameters`), and wheel torques commanded ahead
+of the brakes' lag (:class:`mufusion.planner.controller.ControllerGains`)."""
 
 TURN_SNAPSHOTS_M = (0.0, 15.0, 30.0, 55.0)
 POPUP_SNAPSHOTS_M = (0.0, 2.0, 18.0, 40.0)

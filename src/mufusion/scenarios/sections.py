@@ -240,6 +240,11 @@ class PlannerSettings(_Strict):
     start to where a brake torque commanded then lands, one torque lag later, where that is
     below the stage's (centre of gravity's) μ̂ (docs/decisions/0064); ``false``: the front
     polygon at the stage's μ̂ alone, as in the paper's planner."""
+    front_axle_polygon: bool = PlannerConfig.front_axle_polygon
+    """Take the front friction polygon's μ̂ as the lower of the stage's (centre of gravity's)
+    and the front axle's, l_f ahead, where the front tires meet a drop first
+    (docs/decisions/0112); ``false``: both polygons at the stage's μ̂, as in the paper's
+    planner."""
     brake_first: bool = True
     """Stop in front of an obstacle in the path whenever the friction the planner may use
     allows it (or no side has room), and evade only otherwise; ``false``: evade whenever an
