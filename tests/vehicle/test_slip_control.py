@@ -235,3 +235,43 @@ def test_a_front_wheel_at_full_lock_is_read_in_its_own_plane_and_keeps_its_brake
 
     assert run(steer) == 0.0  # the rolling wheel keeps its brake torque
     assert run(0.0) == pytest.approx(-brake)  # read without the steering: dumped throughout
+
+
+def _drifted_release(settings: SlipControlSettings | None = None):
+    """A car braking while its reference reads 15 m/s and both wheels roll at 11 (the IMU's
+    drift in a slide, which misses ψ̇ v_y): 27 % slip, past the release threshold."""
+    from mufusion.vehicle.slip_control import WheelSlipController
+
+    control = WheelSlipController(CAR, settings or SlipControlSettings(), 0.005, 15.0)
+    wheel = 11.0 / CAR.wheel_radius_m
+    control.modulate((0.0, -800.0, -500.0), wheel, wheel, 0.0, -800.0, -500.0, 0.0)
+    _cmd, status = control.modulate((0.0, -800.0, -500.0), wheel, wheel, 0.0, -800.0, -500.0,
+                                    0.005)
+    assert status.front.phase is SlipPhase.RELEASE  # dumped, as a lock would be
+    return control, wheel
+
+
+def test_a_released_wheel_rolling_freely_ends_the_release_and_the_brake_comes_back() -> None:
+    # The torque is gone and the wheels neither spin up nor slow against the body: they roll
+    # at the vehicle's speed. Before, the release waited for a spin-up that could not come and
+    # the brakes stayed dumped to the end of the run (limits_turn_heldout7, the car on μ 0.15:
+    # 5 s; docs/decisions/0114).
+    control, wheel = _drifted_release()
+    torques = []
+    for step in range(2, 80):
+        cmd, status = control.modulate((0.0, -800.0, -500.0), wheel, wheel, 0.0, 0.0, 0.0,
+                                       step * 0.005)
+        torques.append(-cmd[1])
+    assert control.reference_speed_mps == pytest.approx(11.0)
+    assert status.front.phase is not SlipPhase.RELEASE
+    assert max(torques) >= 0.7 * 800.0  # reapplied from a share of the torque that "locked"
+
+
+def test_a_released_wheel_still_spinning_up_is_no_reference() -> None:
+    # Right after a dump the wheel's brake torque is gone but it spins up fast: it is below
+    # the vehicle's speed and must not pull the reference down.
+    control, wheel = _drifted_release()
+    spin_up = 40.0 / CAR.wheel_radius_m * 0.005  # 40 m/s² faster than the body
+    control.modulate((0.0, -800.0, -500.0), wheel + spin_up, wheel + spin_up, 0.0, 0.0, 0.0,
+                     0.010)
+    assert control.reference_speed_mps == pytest.approx(15.0, abs=0.05)

@@ -196,6 +196,12 @@ class PlannerConfig:
     # The front polygon at the lower μ̂ of the centre of gravity's and the front axle's: the
     # front tires meet a drop l_f earlier; the rear keeps the CoG's (docs/decisions/0112).
     front_axle_polygon: bool = True
+    # The cruise reference's lateral speed and heading error at the curve's steady attitude
+    # for the plans' own model at the guess's speeds (planner/steady_attitude.py), not zero,
+    # which prices the rotation a curve needs. Off: measured, not adopted (the edge draws'
+    # narrow-lane exits shrink but as many remain, one new in a 4.0 m lane: the zero reference
+    # also kept the plans' cornering speed down; docs/decisions/0113).
+    steady_attitude_reference: bool = False
     # Each stage's yaw rate bounded (soft) by μ̂ g / v at the guess's speed, with a margin
     # and body slip by 0.02 μ̂ g (planner/stability.py; issue 38, mechanism B; both backends;
     # on: GT 0.28-0.30 m out there where main is 0.33-0.39 m, docs/decisions/0065).

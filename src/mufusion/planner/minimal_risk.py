@@ -19,8 +19,10 @@ every mode), and if the solve fails or is rejected the roll-out itself is the pl
 While no plan can be trusted at all the loop applies :func:`minimal_risk_command` directly:
 curvature feed-forward plus lateral and heading feedback for steering, braking with what the
 friction circle at the same share of μ̂ g leaves after the lateral acceleration that following
-the lane takes (``v² κ``), split over the axles by their static loads (no model, no
-optimisation; the vehicle's ABS keeps the wheels rolling if μ̂ over-estimates the road).
+the lane takes (``v² κ``; where that is beyond the circle, the split that sheds the speed the
+curve asks with the least depth, :func:`lane_keeping_braking_mps2`), split over the axles by
+their static loads (no model, no optimisation; the vehicle's ABS keeps the wheels rolling if μ̂
+over-estimates the road).
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ from mufusion.vehicle.planner_model import (
     normal_loads_n,
     rear_cornering_stiffness_n_per_rad,
 )
+from mufusion.vehicle.tires import peak_slip_angle_rad
 
 # Share of each axle's friction limit the braking force may use; the rest stays for steering.
 BRAKING_SHARE_OF_LIMIT = 0.8
@@ -203,6 +206,36 @@ class LaneKeepingGains:
     heading_rad_per_rad: float = 0.8
 
 
+def lane_keeping_braking_mps2(speed_mps: float, curvature_1pm: float,
+                              available_mps2: float) -> float:
+    """Deceleration [m/s²] of the minimal-risk manoeuvre's braking on a friction circle of radius
+    ``available_mps2``, beside the lateral acceleration that following the lane takes.
+
+    Within the tires (``v² |κ| ≤ a``) the lane takes ``v² |κ|`` and the braking the rest,
+    ``√(a² − v⁴κ²)``. Beyond them the vehicle leaves the lane whatever it does until it is slower
+    than ``√(a / |κ|)``, and the lane's lateral acceleration is no share to reserve: at a split
+    ``a_y = a sin θ``, ``a_x = a cos θ`` the depth it reaches meanwhile grows with the curvature
+    it lacks, ``|κ| − a_y / v²``, times the square of the distance it needs to slow down,
+    ``∝ 1 / cos² θ``. With ``c = a / (v² |κ|) < 1`` that is ``(1 − c sin θ) / cos² θ``, least at
+    ``sin θ = (1 − √(1 − c²)) / c``: all lateral at the tires' edge (``c = 1``, continuous with
+    the case within them), nearly all braking far beyond it (docs/decisions/0114).
+
+    >>> round(lane_keeping_braking_mps2(10.0, 0.0, 4.0), 3)  # straight: all braking
+    4.0
+    >>> round(lane_keeping_braking_mps2(10.0, 0.02, 4.0), 3)  # 2 of 4 m/s² lateral
+    3.464
+    >>> round(lane_keeping_braking_mps2(10.0, 0.08, 4.0), 3)  # the lane asks 8: brake
+    3.854
+    """
+    available = max(float(available_mps2), 0.0)
+    lateral = float(speed_mps) ** 2 * abs(float(curvature_1pm))
+    if lateral <= available:
+        return math.sqrt(available * available - lateral * lateral)
+    c = available / lateral
+    lateral_share = (1.0 - math.sqrt(1.0 - c * c)) / c
+    return available * math.sqrt(1.0 - lateral_share * lateral_share)
+
+
 def minimal_risk_command(
     x_frenet: np.ndarray,
     curvature_1pm: float,
@@ -248,14 +281,22 @@ def minimal_risk_command(
     x = np.asarray(x_frenet, dtype=float)
     d = float(x[State.d]) if np.isfinite(x[State.d]) else 0.0
     dpsi = float(x[State.dpsi]) if np.isfinite(x[State.dpsi]) else 0.0
+    speed = float(x[State.vx]) if np.isfinite(x[State.vx]) else 0.0
     steer = (
         params.wheelbase_m * curvature_1pm
         - g.lateral_rad_per_m * d
         - g.heading_rad_per_rad * dpsi
     )
-    available = utilization * mu * GRAVITY_MPS2
-    lateral = float(x[State.vx]) ** 2 * abs(curvature_1pm) if np.isfinite(x[State.vx]) else 0.0
-    force = params.mass_kg * math.sqrt(max(available * available - lateral * lateral, 0.0))
+    # No further than the front tire's peak slip angle on μ from the direction the front axle
+    # moves: beyond it the tire gives less, not more. Sliding 5 m off the lane on μ 0.15 the
+    # feedback asked the car for 0.35 rad with its front axle moving 0.27 rad the other way, a
+    # slip angle 29 times the peak, and it spun (docs/decisions/0114).
+    vy, yaw_rate = (float(x[i]) if np.isfinite(x[i]) else 0.0 for i in (State.vy, State.psidot))
+    course = math.atan2(vy + params.cog_to_front_axle_m * yaw_rate, max(speed, 1.0))
+    peak = peak_slip_angle_rad(params.tire, mu)
+    steer = min(max(steer, course - peak), course + peak)
+    force = params.mass_kg * lane_keeping_braking_mps2(
+        speed, curvature_1pm, utilization * mu * GRAVITY_MPS2)
     share_front = params.cog_to_rear_axle_m / params.wheelbase_m
     r = params.wheel_radius_m
     return ActuatorCommand(

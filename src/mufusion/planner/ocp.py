@@ -336,6 +336,7 @@ def tracking_reference(
     speed_mps: float,
     reference_speed_mps: float | np.ndarray,
     reference_d_m: float,
+    attitude: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Least-squares reference ``yref (N+1, 9)`` over ``[x; u]`` and its weights ``(9,)``.
 
@@ -355,6 +356,9 @@ def tracking_reference(
     reference_speed_mps, reference_d_m
         Cruise speed (one value, or one per stage 0..N) and lateral offset (the lane centre)
         targets.
+    attitude
+        Lateral speed [m/s] and heading error [rad] targets per stage 0..N (the curve's steady
+        attitude, :mod:`mufusion.planner.steady_attitude`); ``None``: zero, as in the paper.
 
     Returns
     -------
@@ -389,4 +393,6 @@ def tracking_reference(
     kappa = np.append(curvature_1pm, curvature_1pm[-1])
     # In a curve of curvature κ the steady yaw rate is κ v.
     yref[:, State.psidot] = kappa * v
+    if attitude is not None:
+        yref[:, State.vy], yref[:, State.dpsi] = attitude
     return yref, weights

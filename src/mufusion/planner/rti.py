@@ -40,6 +40,7 @@ from mufusion.planner.safeguards import (
 from mufusion.planner.sampling import SamplingConfig
 from mufusion.planner.speed_ceiling import speed_ceiling_mps
 from mufusion.planner.speed_profile import curve_speed_reference_mps
+from mufusion.planner.steady_attitude import steady_cornering_attitude
 from mufusion.planner.under_axles import lowest_under_axles, sharpest_under_axles
 from mufusion.planner.unseen_road import UnseenRoad
 from mufusion.vehicle.params import VehicleParams
@@ -189,6 +190,8 @@ def iterate(
         yref, weights = tracking_reference(
             cfg, stage.curvature_1pm, stage.mu_hat, mode, float(x0[State.vx]),
             speed_ref, problem.reference_d_m,
+            _steady_attitude(guess_x, stage, par) if cfg.steady_attitude_reference
+            and mode == "cruise" else None,
         )
         status = -1
         try:
@@ -214,6 +217,16 @@ def iterate(
         if reason is not FallbackReason.NONE:
             break
     return Iterated(xs, us, guess_x, guess_u, stage, status, reason, retried, soft_only)
+
+
+def _steady_attitude(guess_x: np.ndarray, stage: StageParameters,
+                     par: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
+    """The curve's steady attitude per stage 0..N at the guess's speeds (the last stage's
+    curvature and stiffness held at N)."""
+    return steady_cornering_attitude(np.append(stage.curvature_1pm, stage.curvature_1pm[-1]),
+                                     guess_x[:, State.vx],
+                                     np.append(stage.rear_stiffness_n_per_rad,
+                                               stage.rear_stiffness_n_per_rad[-1]), par)
 
 
 def _drive_cap_n(par: VehicleParams, cfg: PlannerConfig, mode: PlannerMode,

@@ -245,6 +245,11 @@ class PlannerSettings(_Strict):
     and the front axle's, l_f ahead, where the front tires meet a drop first
     (docs/decisions/0112); ``false``: both polygons at the stage's μ̂, as in the paper's
     planner."""
+    steady_attitude_reference: bool = PlannerConfig.steady_attitude_reference
+    """Track the curve's steady attitude (the lateral speed and heading error at which the
+    plans' model holds the curve at the guess's speed) instead of zero, so that plans rotate
+    the body into a curve as it begins; off by default, measured and not adopted
+    (docs/decisions/0113): zero, as in the paper's planner."""
     brake_first: bool = True
     """Stop in front of an obstacle in the path whenever the friction the planner may use
     allows it (or no side has room), and evade only otherwise; ``false``: evade whenever an

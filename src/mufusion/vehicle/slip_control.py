@@ -179,6 +179,10 @@ class SlipControlStatus:
 PASSIVE_AXLE = AxleSlipStatus(SlipPhase.PASS, 0.0, 0.0)
 
 _MIN_STEER_COS = 0.2
+FREE_WHEEL_TORQUE_NM = 1.0
+"""Below this brake torque [N m] a released wheel rolls freely (the actuator's lag takes a dumped
+torque of hundreds of N m there in about five time constants; a locked wheel has spun up long
+before): if it neither spins up nor slows against the body, it rolls at the vehicle's speed."""
 """Floor of cos δ when the front wheel's speed is read as the body's (δ ≤ 1.37 rad; no preset
 steers beyond 1.07)."""
 
@@ -334,11 +338,21 @@ class WheelSlipController:
             # may brake the front while they drive the rear (or a brake's lag leaves a tail),
             # and a spinning rear wheel taken as the reference reads no slip of its own, so
             # traction control let it run away (docs/decisions/0110).
-            reference = floor
-            if wheel_f > reference and asked_f <= 0.0 and torque_front_nm <= 0.0:
-                reference = wheel_f
-            if wheel_r > reference and asked_r <= 0.0 and torque_rear_nm <= 0.0:
-                reference = wheel_r
+            # A released wheel whose brake torque is gone and that no longer spins up rolls at
+            # the vehicle's speed: it alone is the reference then, below the IMU's too. In a
+            # slide the IMU misses ψ̇ v_y (0.6 m/s² at 0.3 rad/s and 2 m/s of side slip), the
+            # reference drifted above the wheels and read their free rolling as a lock, and the
+            # release never ended: the brakes stayed dumped for seconds. Nor may a braked wheel
+            # raise it: a steered front wheel, read in its plane without the unknown v_y, reads
+            # v_x + v_y tan δ, 1.7 m/s fast in a counter-steered slide (docs/decisions/0114).
+            free = self._free_wheels_mps(wheel_f, wheel_r, accel_x_mps2, torque_front_nm,
+                                         torque_rear_nm)
+            reference = max(free) if free else floor
+            if not free:
+                if wheel_f > reference and asked_f <= 0.0 and torque_front_nm <= 0.0:
+                    reference = wheel_f
+                if wheel_r > reference and asked_r <= 0.0 and torque_rear_nm <= 0.0:
+                    reference = wheel_r
         else:
             reference = wheel_f  # the undriven front wheel rolls freely
         self.reference_speed_mps = reference
@@ -370,6 +384,22 @@ class WheelSlipController:
             out.append(torque)
             statuses.append(AxleSlipStatus(machine.phase, abs(asked - torque), slip))
         return (steer, out[0], out[1]), self._status(statuses[0], statuses[1])
+
+    def _free_wheels_mps(self, wheel_f: float, wheel_r: float, accel_x_mps2: float,
+                         torque_front_nm: float, torque_rear_nm: float) -> list[float]:
+        """Speeds of the released wheels that roll freely: in ``RELEASE``, their torque below
+        :data:`FREE_WHEEL_TORQUE_NM`, accelerating as the body does (within the margin)."""
+        previous = self._previous_wheel_mps
+        if previous is None:
+            return []
+        margin = self.settings.wheel_accel_margin_mps2
+        return [
+            wheel for machine, wheel, before, torque in (
+                (self._front, wheel_f, previous[0], torque_front_nm),
+                (self._rear, wheel_r, previous[1], torque_rear_nm))
+            if machine.phase is SlipPhase.RELEASE and abs(torque) < FREE_WHEEL_TORQUE_NM
+            and abs((wheel - before) / self.dt_s - accel_x_mps2) < margin
+        ]
 
     def _status(self, front: AxleSlipStatus, rear: AxleSlipStatus) -> SlipControlStatus:
         return SlipControlStatus(front, rear, self.reference_speed_mps, self._front.cycles,

@@ -38,6 +38,7 @@ for the functions here.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -147,3 +148,36 @@ def tire_forces(
         np.where(loaded, phi, 0.0),
         np.where(loaded, lam, 0.0),
     )
+
+
+@functools.lru_cache(maxsize=32)
+def _peak_argument(shape: float, curvature: float) -> float:
+    """``y = B s`` where ``sin(C atan(y − E (y − atan y)))`` peaks; ``inf`` where it rises for
+    ever (``C ≤ 1``, or ``E = 1`` with ``π / (2C)`` out of reach)."""
+    if shape <= 1.0:
+        return math.inf
+    target = math.tan(math.pi / (2.0 * shape))
+
+    def inner(y: float) -> float:
+        return y - curvature * (y - math.atan(y)) - target
+
+    far = 1e6
+    if inner(far) < 0.0:
+        return math.inf
+    from scipy.optimize import brentq  # lazily: SciPy's import is 0.4 s (docs/performance.md)
+
+    return float(brentq(inner, 0.0, far))
+
+
+def peak_slip_angle_rad(tire: TireParams, mu: float) -> float:
+    """Slip angle [rad] at which the lateral force peaks on friction ``mu`` (``inf`` if it
+    never does): ``y* C μ / k_y`` with ``y*`` the curve's peak argument (the normalised slip
+    ``s = k_y α / μ`` peaks at ``y* / B = y* C``), so the peak moves with μ: the car's tire peaks
+    at 0.142 μ rad, 1.2° on ice (μ 0.15).
+
+    >>> from mufusion.vehicle.params import CAR
+    >>> round(peak_slip_angle_rad(CAR.tire, 1.0), 3), round(peak_slip_angle_rad(CAR.tire, 0.15), 4)
+    (0.142, 0.0213)
+    """
+    return (_peak_argument(tire.shape_lateral, tire.curvature_lateral) * tire.shape_lateral * mu
+            / tire.cornering_stiffness_per_load_1_per_rad)
