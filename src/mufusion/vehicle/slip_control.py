@@ -51,18 +51,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from enum import IntEnum
 
 from mufusion.vehicle.params import VehicleParams
+from mufusion.vehicle.slip_phases import AxlePhaseMachine
 
-
-class SlipPhase(IntEnum):
-    """Phase of one axle's slip controller (see the module docstring)."""
-
-    PASS = 0
-    RELEASE = 1
-    HOLD = 2
-    REAPPLY = 3
+# Importers of this module keep the phases' name.
+from mufusion.vehicle.slip_phases import SlipPhase as SlipPhase
 
 
 @dataclass(frozen=True)
@@ -187,65 +181,6 @@ before): if it neither spins up nor slows against the body, it rolls at the vehi
 steers beyond 1.07)."""
 
 
-class _AxleMachine:
-    """One axle's phase machine on torque magnitudes (brake or drive, signs taken off)."""
-
-    __slots__ = ("cycles", "held", "lock", "phase", "settings", "since")
-
-    def __init__(self, settings: SlipControlSettings) -> None:
-        self.settings = settings
-        self.phase = SlipPhase.PASS
-        self.lock = 0.0  # torque at which the wheel began to run away [N m]
-        self.held = 0.0  # torque the current hold or reapply starts from [N m]
-        self.since = 0.0  # when the current phase began [s]
-        self.cycles = 0
-
-    def reset(self) -> None:
-        self.phase = SlipPhase.PASS
-
-    def step(self, t: float, asked: float, applied: float, excess: float, runaway: float) -> float:
-        """Torque magnitude to command [N m].
-
-        ``asked``: the command's magnitude; ``applied``: the actuator's torque magnitude now;
-        ``excess``: the slip in the command's direction (braking: −λ); ``runaway``: how much
-        faster than the body the wheel's circumference moves in that direction [m/s²].
-        """
-        cfg = self.settings
-        phase = self.phase
-        if phase is SlipPhase.RELEASE:
-            # Dump until the wheel clearly spins up again (or its slip has recovered already).
-            if runaway < -cfg.wheel_accel_margin_mps2 or excess < cfg.recovered_slip:
-                self.phase, self.since, self.held = SlipPhase.HOLD, t, applied
-                return min(applied, asked)
-            return 0.0
-        if phase is SlipPhase.HOLD:
-            if excess > cfg.release_slip and runaway > 0.0:
-                return self._release(t, applied)  # it locks again while held
-            if excess < cfg.recovered_slip or t - self.since >= cfg.max_hold_s:
-                self.phase, self.since = SlipPhase.REAPPLY, t
-            return min(self.held, asked)
-        if excess > cfg.release_slip or (
-            excess > cfg.onset_slip and runaway > cfg.wheel_accel_margin_mps2
-        ):
-            return self._release(t, applied)
-        if phase is SlipPhase.PASS:
-            return asked
-        # Straight back to a share of the torque that locked the wheel (the peak lies below it,
-        # not far), then slowly on towards and past it.
-        start = max(self.held, cfg.reapply_fraction * self.lock)
-        cap = start + (t - self.since) * self.lock / cfg.reapply_time_s
-        if cap >= asked:
-            self.phase = SlipPhase.PASS
-            return asked
-        return cap
-
-    def _release(self, t: float, applied: float) -> float:
-        """A new cycle: remember the torque that was too much, and dump it."""
-        self.phase, self.since, self.cycles = SlipPhase.RELEASE, t, self.cycles + 1
-        self.lock = max(applied, 1e-3)
-        return 0.0
-
-
 class WheelSlipController:
     """ABS and TCS for one vehicle, stepped once per plant step (see the module docstring).
 
@@ -283,8 +218,8 @@ class WheelSlipController:
         self.reference_speed_mps = max(float(initial_speed_mps), 0.0)
         self._time_s = 0.0
         self._previous_wheel_mps: tuple[float, float] | None = None
-        self._front = _AxleMachine(settings)
-        self._rear = _AxleMachine(settings)
+        self._front = AxlePhaseMachine(settings)
+        self._rear = AxlePhaseMachine(settings)
 
     def modulate(
         self,
@@ -390,8 +325,9 @@ class WheelSlipController:
         """Speeds of the released wheels that roll freely: in ``RELEASE``, their torque below
         :data:`FREE_WHEEL_TORQUE_NM`, accelerating as the body does (within the margin)."""
         previous = self._previous_wheel_mps
-        if previous is None:
-            return []
+        if previous is None or (self._front.phase is not SlipPhase.RELEASE
+                                and self._rear.phase is not SlipPhase.RELEASE):
+            return []  # the common case, at the plant's rate: nothing released
         margin = self.settings.wheel_accel_margin_mps2
         return [
             wheel for machine, wheel, before, torque in (
