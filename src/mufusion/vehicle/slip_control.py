@@ -50,94 +50,14 @@ near their force peak is unchanged by the controller (bit for bit: it passes the
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.slip_phases import AxlePhaseMachine
 
-# Importers of this module keep the phases' name.
+# Importers of this module keep the settings' and the phases' names.
+from mufusion.vehicle.slip_phases import SlipControlSettings as SlipControlSettings
 from mufusion.vehicle.slip_phases import SlipPhase as SlipPhase
-
-
-@dataclass(frozen=True)
-class SlipControlSettings:
-    """ABS and TCS switches and thresholds (slips as ratios, accelerations in m/s²).
-
-    Attributes
-    ----------
-    abs_enabled, tcs_enabled
-        Anti-lock braking and traction control on (the default, as on every production vehicle)
-        or off (to show what they do).
-    onset_slip
-        Slip beyond which a wheel decelerating faster than the body (by
-        ``wheel_accel_margin_mps2``) is taken to be locking [-], in (0, 0.5).
-    release_slip
-        Slip beyond which the brake is released whatever the wheel's acceleration [-], in
-        (onset_slip, 1).
-    wheel_accel_margin_mps2
-        How much faster than the body a wheel's circumference must decelerate (brake) or
-        accelerate (drive) to count as running away [m/s²], > 0.
-    recovered_slip
-        Slip below which a released wheel has spun up again [-], in (0, onset_slip].
-    max_hold_s
-        Longest hold before the torque builds up again [s], > 0.
-    reapply_fraction
-        Share of the torque at which the wheel began to lock that the build-up starts from
-        (or the held torque, if higher) [-], in (0, 1].
-    reapply_time_s
-        Time in which the torque then builds by the torque at which the wheel began to lock
-        [s], > 0; it keeps rising at that rate until the command is reached or the wheel runs
-        away again.
-    min_speed_mps
-        Below this reference speed the controller passes the command through (the brakes hold a
-        stopped vehicle) [m/s], ≥ 0.
-    reference_decel_margin_mps2
-        How much faster than the IMU's deceleration the reference speed may fall while braking,
-        to follow wheels that decelerate within their grip [m/s²], > 0 (the IMU misses the
-        curve's ``ψ̇ v_y``; a locking wheel decelerates many times faster).
-    """
-
-    abs_enabled: bool = True
-    tcs_enabled: bool = True
-    onset_slip: float = 0.12
-    release_slip: float = 0.25
-    wheel_accel_margin_mps2: float = 10.0
-    recovered_slip: float = 0.05
-    max_hold_s: float = 0.3
-    reapply_fraction: float = 0.7
-    reapply_time_s: float = 0.3
-    min_speed_mps: float = 2.0
-    reference_decel_margin_mps2: float = 2.0
-
-    def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if f.type in (bool, "bool"):
-                if not isinstance(value, bool):
-                    raise ValueError(f"{f.name} must be true or false, got {value!r}")
-            elif isinstance(value, bool) or not (
-                isinstance(value, (int, float)) and math.isfinite(value)
-            ):
-                raise ValueError(f"{f.name} must be a finite number, got {value!r}")
-        if not 0.0 < self.onset_slip < 0.5:
-            raise ValueError(f"onset_slip must be in (0, 0.5), got {self.onset_slip!r}")
-        if not self.onset_slip < self.release_slip < 1.0:
-            raise ValueError(
-                f"release_slip must be in (onset_slip = {self.onset_slip}, 1), "
-                f"got {self.release_slip!r}")
-        if not 0.0 < self.recovered_slip <= self.onset_slip:
-            raise ValueError(
-                f"recovered_slip must be in (0, onset_slip = {self.onset_slip}], "
-                f"got {self.recovered_slip!r}")
-        if not 0.0 < self.reapply_fraction <= 1.0:
-            raise ValueError(
-                f"reapply_fraction must be in (0, 1], got {self.reapply_fraction!r}")
-        for name in ("wheel_accel_margin_mps2", "max_hold_s", "reapply_time_s",
-                     "reference_decel_margin_mps2"):
-            if not getattr(self, name) > 0.0:
-                raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
-        if not self.min_speed_mps >= 0.0:
-            raise ValueError(f"min_speed_mps must be >= 0 m/s, got {self.min_speed_mps!r}")
 
 
 @dataclass(frozen=True)
