@@ -137,7 +137,8 @@ def test_gt_recovers_from_the_slide_it_spun_in_with_the_linear_rear_tire() -> No
     # the minimal-risk stop and ends 3.8 m out. With the saturated tire it counter-steers,
     # brakes on the front and recovers in the lane's neighbourhood. Measured with the front
     # polygon at the centre of gravity's μ̂: at the front axle's (0112, the default) the plans
-    # no longer slide there (tests/planner/test_axle_friction.py).
+    # no longer slide there (tests/planner/test_axle_friction.py); and with ESC of 0082: its
+    # body-slip return (0115) catches the linear tire's slide too (the car stays in its lane).
     from mufusion.metrics import compute_metrics
     from mufusion.scenarios import load_scenario
     from mufusion.scenarios.runner import run_scenario
@@ -145,7 +146,8 @@ def test_gt_recovers_from_the_slide_it_spun_in_with_the_linear_rear_tire() -> No
     base = ["vehicle=car", "initial_speed_mps=19", "duration_s=10", "turn.radius_m=40",
             "turn.angle_rad=1.5708", "turn.start_ahead_m=20", "turn.clothoid_m=5",
             "turn.direction=left", "friction.mu_before=0.9", "friction.mu_turn=0.3",
-            "friction.change_ahead_m=10", "planner.front_axle_polygon=false"]
+            "friction.change_ahead_m=10", "planner.front_axle_polygon=false",
+            "sim.esc_body_slip_return_s=null"]
     outcome = {
         on: compute_metrics(run_scenario(load_scenario(
             "turn", [*base, f"planner.rear_saturation={str(on).lower()}"]), "GT"))

@@ -49,8 +49,10 @@ def test_rear_overuse_tolerance_is_checked() -> None:
 # posterior mean at the turn-in, eased to 0.75 with a plan that kept the lane only by braking
 # the rear at 1.8 × its friction while cornering, and spun 15.7 m off the lane. On the plans'
 # linear rear tire, where this was found: with the saturated one (decision 0109) the plans see
-# that slide coming and the counterfactual keeps its lane too.
-_MARGINAL_ARC = ["planner.rear_saturation=false", "vehicle=car", "initial_speed_mps=22",
+# that slide coming and the counterfactual keeps its lane too; and with ESC of 0082: its
+# body-slip return (0115) catches the counterfactual's slide as well.
+_MARGINAL_ARC = ["planner.rear_saturation=false", "sim.esc_body_slip_return_s=null",
+                 "vehicle=car", "initial_speed_mps=22",
                  "turn.radius_m=80", "turn.angle_rad=1.6",
                  "turn.start_ahead_m=40", "turn.clothoid_m=10", "friction.mu_before=0.3",
                  "friction.mu_turn=0.7", "friction.change_ahead_m=160", "duration_s=7"]

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from mufusion.scenarios import load_scenario
 from mufusion.vehicle.actuators import ActuatorCommand
@@ -12,7 +14,8 @@ from mufusion.vehicle.stability_control import StabilityControlSettings, YawStab
 
 
 def test_it_acts_only_on_a_yaw_rate_beyond_what_steering_and_cornering_explain() -> None:
-    esc = YawStabilityController(TRUCK, StabilityControlSettings())
+    # The rule of 0082 (without the body-slip return of 0115, tested below).
+    esc = YawStabilityController(TRUCK, StabilityControlSettings(body_slip_return_s=None))
     wheelbase = TRUCK.cog_to_front_axle_m + TRUCK.cog_to_rear_axle_m
     # Turning as the steering asks (ψ̇ = v δ / L, with the lateral acceleration to match).
     assert esc.moment(15.0, 15.0 * 0.05 / wheelbase, 0.05, 15.0**2 * 0.05 / wheelbase, 0.9,
@@ -72,6 +75,13 @@ def test_settings_are_checked_by_name() -> None:
         StabilityControlSettings(response_time_s=0.0)
     with pytest.raises(ValueError, match="yaw_rate_deadband_radps"):
         StabilityControlSettings(yaw_rate_deadband_radps=-0.1)
+    for bad in (0.0, -1.0, float("inf"), True):
+        with pytest.raises(ValueError, match="body_slip_return_s"):
+            StabilityControlSettings(body_slip_return_s=bad)
+    with pytest.raises(ValueError, match="esc_body_slip_return_s"):
+        load_scenario("turn", ["sim.esc_body_slip_return_s=0"])
+    assert load_scenario("turn", ["sim.esc_body_slip_return_s=null"]).sim.stability_control() == (
+        StabilityControlSettings(body_slip_return_s=None))
     with pytest.raises(ValueError, match="stability_control"):
         Plant(CAR, initial_state(CAR, 0.0, 0.0, 0.0, 10.0), stability_control=True)  # type: ignore[arg-type]
 
@@ -139,3 +149,61 @@ def test_with_drive_cut_it_withholds_drive_only_while_the_rear_is_swung_out() ->
         StabilityControlSettings(drive_cut=1)  # type: ignore[arg-type]
     assert load_scenario("turn", ["sim.esc_drive_cut=true"]).sim.stability_control() == (
         StabilityControlSettings(drive_cut=True))
+
+
+def test_with_the_rear_out_the_steering_no_longer_explains_the_rotation() -> None:
+    # The car at 10 m/s turning left at 0.3 rad/s with a_y / v = 0.28 rad/s, the rear 0.1 rad
+    # out, the steering asking 0.4 rad/s (a driver steering into the slide). The rule of 0082
+    # takes the steering's rate as the explanation and stays passive; returning the body slip
+    # (0115), the explained rate is a_y / v less (0.1 − 0.05) / 0.5 s = 0.18 rad/s and the moment
+    # removes the 0.12 rad/s beyond it in the response time.
+    wheelbase = CAR.cog_to_front_axle_m + CAR.cog_to_rear_axle_m
+    steer = 0.4 * wheelbase / 10.0
+    old = YawStabilityController(CAR, StabilityControlSettings(body_slip_return_s=None))
+    assert old.moment(10.0, 0.3, steer, 2.8, 0.9, -0.1) == (0.0, 0.0)
+    esc = YawStabilityController(CAR, StabilityControlSettings())
+    assert esc.settings.body_slip_return_s == 0.5
+    mz, fx = esc.moment(10.0, 0.3, steer, 2.8, 0.9, -0.1)
+    assert mz == pytest.approx(-CAR.yaw_inertia_kgm2 * 0.12 / 0.2)
+    assert fx == pytest.approx(-abs(mz) / (0.5 * CAR.track_width_m))
+    # Mirrored: the same magnitude, the other way.
+    assert esc.moment(10.0, -0.3, -steer, -2.8, 0.9, 0.1)[0] == pytest.approx(-mz)
+    # Within the body-slip deadband, or with the slip pointing into the rotation: passive.
+    assert esc.moment(10.0, 0.3, steer, 2.8, 0.9, -0.05) == (0.0, 0.0)
+    assert esc.moment(10.0, 0.3, steer, 2.8, 0.9, 0.1) == (0.0, 0.0)
+
+
+@given(slip=st.floats(0.0501, 0.5), more=st.floats(0.0, 0.3), yaw=st.floats(0.05, 1.0),
+       accel=st.floats(0.0, 9.0))
+def test_the_moment_grows_from_zero_at_the_deadband_with_the_slip(
+        slip: float, more: float, yaw: float, accel: float) -> None:
+    # Without the yaw-rate deadband the moment is continuous where the controller engages:
+    # at a slip just beyond its deadband and a rotation the velocity's turning explains, it is
+    # the small one that returns that slip; and it never shrinks as the rear swings further.
+    esc = YawStabilityController(CAR, StabilityControlSettings())
+    speed = 12.0
+    turning = min(accel / speed, yaw)
+    at_edge, _ = esc.moment(speed, turning, 0.0, accel, 1.0, -0.05000001)
+    assert abs(at_edge) <= CAR.yaw_inertia_kgm2 * 1e-6
+    first, _ = esc.moment(speed, yaw, 0.0, accel, 1.0, -slip)
+    further, _ = esc.moment(speed, yaw, 0.0, accel, 1.0, -(slip + more))
+    assert further <= first <= 0.0
+
+
+def test_a_drift_on_low_friction_is_held_at_the_deadband_where_it_grew_before() -> None:
+    # The car drifting left at 10 m/s on μ 0.3 (rear 0.06 rad out, yaw rate 0.32 rad/s, a little
+    # steering, rear drive 100 N m held), 2 s: under the rule of 0082 the yaw rate stays within
+    # its deadband of a_y / v and the slip keeps growing (past 0.15 rad); returning the slip,
+    # ESC holds it at its deadband.
+    import math
+
+    final = {}
+    for ret in (None, 0.5):
+        x0 = initial_state(CAR, 0.0, 0.0, 0.0, 10.0)
+        x0[4], x0[5] = 10.0 * math.tan(-0.06), 0.32
+        plant = Plant(CAR, x0, stability_control=StabilityControlSettings(body_slip_return_s=ret))
+        for _ in range(400):
+            out = plant.step(ActuatorCommand(0.02, 0.0, 100.0), 0.3, 0.3)
+        final[ret] = -math.atan2(float(out.x[4]), float(out.x[3]))
+    assert final[None] > 0.15
+    assert final[0.5] < 0.06

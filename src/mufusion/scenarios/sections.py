@@ -285,6 +285,11 @@ class SimSettings(_Strict):
     """Yaw stability control in the vehicle (:mod:`mufusion.vehicle.stability_control`): a yaw
     moment from braking one front wheel when the vehicle rotates faster than its steering asks,
     as on every production car and truck; ``false`` shows what it does (docs/decisions/0082)."""
+    esc_body_slip_return_s: Annotated[
+        float, Field(gt=0.0, le=10.0, allow_inf_nan=False)] | None = 0.5
+    """With the rear swung out beyond ESC's body-slip deadband, the time [s] in which ESC's
+    moment returns the body slip to it (the steering no longer explains the rotation); ``null``
+    switches it off, the rule of docs/decisions/0082 (docs/decisions/0115)."""
     esc_drive_cut: bool = False
     """ESC also withholds drive torque while the rear is swung out beyond its body-slip
     deadband (production ESC's engine intervention); measured, not adopted
@@ -303,7 +308,10 @@ class SimSettings(_Strict):
 
     def stability_control(self) -> StabilityControlSettings | None:
         """The vehicle's yaw stability control (``None`` with ``esc`` off)."""
-        return StabilityControlSettings(drive_cut=self.esc_drive_cut) if self.esc else None
+        if not self.esc:
+            return None
+        return StabilityControlSettings(drive_cut=self.esc_drive_cut,
+                                        body_slip_return_s=self.esc_body_slip_return_s)
 
 
 class InitialPerturbation(_Strict):

@@ -17,7 +17,10 @@ growing, the vehicle rotating rather than cornering). Oversteer is a yaw rate be
 counted in the direction of the rotation); the controller acts when that excess passes a
 deadband, with the moment that would remove it within ``response_time_s``:
 ``M_z = −sign(ψ̇) I_z · excess / τ``, bounded as above. Acting on the steering's rate alone
-braked trucks that corner with little steering at speed (docs/decisions/0061). It reads the
+braked trucks that corner with little steering at speed (docs/decisions/0061). With the rear
+swung out beyond the body-slip deadband it also bounds the body slip, as production ESC does
+(van Zanten): the rotation is then explained by ``a_y / v`` alone, less the rate that returns
+the slip to the deadband in ``body_slip_return_s`` (docs/decisions/0115). It reads the
 vehicle's own signals only (yaw-rate sensor, steering angle, wheel-speed/IMU speed and lateral
 acceleration); the bound is the physics of the braked wheel, not something the controller knows.
 
@@ -58,6 +61,15 @@ class StabilityControlSettings:
     body_slip_deadband_rad: float = 0.05
     response_time_s: float = 0.2
     min_speed_mps: float = 3.0
+    body_slip_return_s: float | None = 0.5
+    """With the rear swung out beyond ``body_slip_deadband_rad``: the time [s], > 0, in which
+    the moment would also return the body slip to that deadband. The rotation is then explained
+    by the velocity's turning ``a_y / v`` alone, less the rate that returns the slip; the
+    steering's rate no longer counts (a driver steering into a slide does not make it stable)
+    and the yaw-rate deadband does not apply (the body-slip deadband gates the controller, and
+    the moment grows from zero at it). Production ESC bounds the body slip as well as the yaw
+    rate (van Zanten, SAE 2000-01-1633); docs/decisions/0115. ``None``: the rule before (the
+    larger of the two rates, beyond the yaw-rate deadband)."""
     drive_cut: bool = False
     """Also withhold drive torque while the body slip points against the rotation beyond
     ``body_slip_deadband_rad`` (the rear swung out): production ESC's engine intervention
@@ -66,8 +78,14 @@ class StabilityControlSettings:
     def __post_init__(self) -> None:
         if not isinstance(self.drive_cut, bool):
             raise ValueError(f"drive_cut must be true or false, got {self.drive_cut!r}")
+        if self.body_slip_return_s is not None and not (
+                isinstance(self.body_slip_return_s, (int, float))
+                and not isinstance(self.body_slip_return_s, bool)
+                and math.isfinite(self.body_slip_return_s) and self.body_slip_return_s > 0.0):
+            raise ValueError("body_slip_return_s must be a finite number > 0 s or None, got "
+                             f"{self.body_slip_return_s!r}")
         for f in fields(self):
-            if f.name == "drive_cut":
+            if f.name in ("drive_cut", "body_slip_return_s"):
                 continue
             value = getattr(self, f.name)
             if isinstance(value, bool) or not (
@@ -128,14 +146,23 @@ class YawStabilityController:
         cfg = self.settings
         if not speed_mps > cfg.min_speed_mps:
             return 0.0, 0.0
-        if not -body_slip_rad * math.copysign(1.0, yaw_rate_radps) > cfg.body_slip_deadband_rad:
+        swung_out = -body_slip_rad * math.copysign(1.0, yaw_rate_radps)
+        if not swung_out > cfg.body_slip_deadband_rad:
             return 0.0, 0.0
         explained = 0.0
-        for rate in (speed_mps * steer_rad / self._wheelbase_m, accel_y_mps2 / speed_mps):
+        cornering = accel_y_mps2 / speed_mps
+        for rate in (speed_mps * steer_rad / self._wheelbase_m, cornering):
             if rate * yaw_rate_radps > 0.0:  # a rate in the rotation's direction explains it
                 explained = max(explained, abs(rate))
+        deadband = cfg.yaw_rate_deadband_radps
+        if cfg.body_slip_return_s is not None:
+            # The rear is out: a rotation beyond the velocity's turning grows the body slip,
+            # whatever the steering asks, and the slip beyond the deadband is to be returned.
+            turning = abs(cornering) if cornering * yaw_rate_radps > 0.0 else 0.0
+            returning = (swung_out - cfg.body_slip_deadband_rad) / cfg.body_slip_return_s
+            explained, deadband = turning - returning, 0.0
         excess = abs(yaw_rate_radps) - explained
-        if not excess > cfg.yaw_rate_deadband_radps:
+        if not excess > deadband:
             return 0.0, 0.0
         moment = -math.copysign(
             self.params.yaw_inertia_kgm2 * excess / cfg.response_time_s, yaw_rate_radps)
