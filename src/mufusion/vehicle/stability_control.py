@@ -149,16 +149,16 @@ class YawStabilityController:
         swung_out = -body_slip_rad * math.copysign(1.0, yaw_rate_radps)
         if not swung_out > cfg.body_slip_deadband_rad:
             return 0.0, 0.0
-        explained = 0.0
+        # Each rate explains the rotation only in its direction.
         cornering = accel_y_mps2 / speed_mps
-        for rate in (speed_mps * steer_rad / self._wheelbase_m, cornering):
-            if rate * yaw_rate_radps > 0.0:  # a rate in the rotation's direction explains it
-                explained = max(explained, abs(rate))
-        deadband = cfg.yaw_rate_deadband_radps
-        if cfg.body_slip_return_s is not None:
+        turning = abs(cornering) if cornering * yaw_rate_radps > 0.0 else 0.0
+        if cfg.body_slip_return_s is None:
+            steering = speed_mps * steer_rad / self._wheelbase_m
+            steered = abs(steering) if steering * yaw_rate_radps > 0.0 else 0.0
+            explained, deadband = max(steered, turning), cfg.yaw_rate_deadband_radps
+        else:
             # The rear is out: a rotation beyond the velocity's turning grows the body slip,
             # whatever the steering asks, and the slip beyond the deadband is to be returned.
-            turning = abs(cornering) if cornering * yaw_rate_radps > 0.0 else 0.0
             returning = (swung_out - cfg.body_slip_deadband_rad) / cfg.body_slip_return_s
             explained, deadband = turning - returning, 0.0
         excess = abs(yaw_rate_radps) - explained
