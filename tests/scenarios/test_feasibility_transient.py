@@ -74,18 +74,23 @@ def _car_turn(mu: float, radius_m: float, approach_m: float, lane_width_m: float
 
 def test_a_turn_within_the_tires_is_kept_and_the_least_time_is_driven() -> None:
     """R 40 m on μ 0.9 from 14 m/s: a point mass needs no braking (v²/R = 0.50 g); the body
-    stays in the lane and nothing forces the speed down."""
+    stays in the lane and nothing forces the speed down in the arc."""
     road, end_m = _car_turn(0.9, 40.0, 20.0)
     verdict = least_lane_excursion(road, CAR, 0.0, 14.0, end_m, ds_m=2.0)
     assert verdict.converged
     assert verdict.excursion_m < 1e-3
-    assert verdict.speed_mps.min() > 13.0
+    in_arc = (verdict.s_m > 25.0) & (verdict.s_m < 20.0 + 40.0 * 0.8)
+    # Through the arc faster than it entered. (Before it the least-time part is a local
+    # optimum: from this start it eases to 13.0 m/s over the first metres, from another it does
+    # not; which one IPOPT found depended on the BLAS thread count until the oracle ran one
+    # thread: docs/decisions/0116.)
+    assert verdict.speed_mps[in_arc].min() > 14.0
     assert np.all(np.diff(verdict.time_s) > 0.0)
     # A driver who keeps half of the friction in reserve (0.45 g) must slow for the same arc:
     # the point mass at 0.45 g holds 13.3 m/s there, the lane's play a little more.
     reserved = least_lane_excursion(road, CAR, 0.0, 14.0, end_m, ds_m=2.0, max_utilization=0.5)
     assert reserved.converged and reserved.excursion_m < 1e-3
-    in_arc = (reserved.s_m > 25.0) & (reserved.s_m < 20.0 + 40.0 * 0.8)
+    assert np.array_equal(reserved.s_m, verdict.s_m)
     assert reserved.speed_mps[in_arc].max() < 13.9
     assert reserved.time_s[-1] > verdict.time_s[-1]
 

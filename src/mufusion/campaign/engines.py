@@ -32,8 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
-from threadpoolctl import threadpool_limits
-
+from mufusion._threads import one_blas_thread
 from mufusion.campaign.schema import ENGINES, Engine
 from mufusion.campaign.specs import RunSpec
 from mufusion.metrics import RunMetrics, compute_metrics
@@ -156,8 +155,10 @@ def _set_up_worker(log_level: int) -> None:
     """Make a worker process behave like one core of this campaign."""
     # One BLAS thread per worker: OpenBLAS starts one per core in every process, and `jobs`
     # workers each spinning `cores` threads over-subscribe the machine (a 10-run pop-up
-    # campaign, 2 jobs on 2 cores: 27–29 s with them, 12–23 s without).
-    threadpool_limits(limits=1, user_api="blas")
+    # campaign, 2 jobs on 2 cores: 27–29 s with them, 12–23 s without). The libraries loaded
+    # now are limited for the worker's life; each run limits them again, CasADi's among them
+    # once a run has built a reference solver (mufusion._threads).
+    one_blas_thread()  # applied at once, kept for the worker's life
     logging.getLogger("mufusion").setLevel(log_level)
 
 

@@ -9,13 +9,12 @@ which is the abrupt change the sampling augmentation exists for.
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Callable
 
 import numpy as np
-from threadpoolctl import ThreadpoolController
 
+from mufusion._threads import one_blas_thread
 from mufusion.configurations import (
     CONFIGURATION_NAMES,
     Configuration,
@@ -291,9 +290,9 @@ def run_scenario(
 
     Notes
     -----
-    The run limits the BLAS thread pools (OpenBLAS of numpy and scipy) to one thread. What the
-    solver library prints meanwhile (to file descriptor 1) is captured into the log's
-    ``solver_messages``.
+    The run limits the BLAS thread pools (the OpenBLAS of numpy, scipy and CasADi) to one
+    thread. What the solver library prints meanwhile (to file descriptor 1) is captured into the
+    log's ``solver_messages``.
     """
     loop = build_loop(cfg, friction=configuration, planner=planner, controller=controller)
     return run_loop(loop, cfg.duration_s, progress=progress)
@@ -306,19 +305,14 @@ def run_loop(
     thread, the solver's messages into the log); the loop keeps what its supervisors did
     (:attr:`~mufusion.sim.loop.ClosedLoop.supervision`)."""
     # One BLAS thread: the fusion's small matrix products gain nothing from a thread pool, and
-    # on a busy machine its spinning threads made runs several times slower.
+    # on a busy machine its spinning threads made runs several times slower. The libraries are
+    # scanned here, after the loop's solver was built: CasADi's OpenBLAS (the reference
+    # backend's IPOPT) is loaded by then (mufusion._threads).
     # The solver library's printf goes into the log, not onto the terminal (sim.solver_output).
-    with _blas_controller().limit(limits=1, user_api="blas"), captured_output() as messages:
+    with one_blas_thread(), captured_output() as messages:
         log = loop.run(duration_s, progress=progress, warmup_steps=WARMUP_PLANNING_STEPS)
     log.solver_messages = messages
     return log
-
-
-@functools.cache
-def _blas_controller() -> ThreadpoolController:
-    # Scanning the loaded libraries costs milliseconds; numpy's and scipy's BLAS are loaded by
-    # the time the first run starts, so one scan serves every run of the process.
-    return ThreadpoolController()
 
 
 def _planner_obstacle(o: Obstacle) -> PlannerObstacle:

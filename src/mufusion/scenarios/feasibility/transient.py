@@ -18,7 +18,8 @@ slip ratios are decisions, so no ABS cycle is lost), no wheel inertia, and full 
 road. It leaves out the stability control's yaw moment (differential braking). So ``E* > 0`` says
 that no controller of this vehicle keeps the body in the lane (within the optimiser's reach: the
 problem is non-convex and IPOPT's optimum is local, so the solve starts from two guesses), and
-``E* = 0`` comes with a trajectory that does.
+``E* = 0`` comes with a trajectory that does: the least time from the start that found it, a
+local optimum too (docs/decisions/0116).
 
 Independent variable: the progress ``s`` along the lane centre (the true friction and the
 curvature are then known per node). Lane test at the footprint's four corners, the body turned
@@ -36,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from mufusion._threads import load_casadi_ipopt, one_blas_thread
 from mufusion.road import Road
 from mufusion.scenarios.feasibility.common import GRAVITY_MPS2, require_positive
 from mufusion.scenarios.feasibility.transient_model import rk4_function, spatial_model
@@ -309,24 +311,26 @@ def least_lane_excursion(
     if guess is not None:
         starts.insert(0, ("trajectory", functools.partial(from_trajectory, guess)))
     best: tuple[float, str, str, np.ndarray] | None = None
-    for label, start in starts:
-        start()
-        opti.set_initial(excursion, 1.0)
-        try:
-            sol = opti.solve()
-            status, ok = str(sol.stats()["return_status"]), True
-            values = np.asarray(sol.value(X))
-            e_star = float(sol.value(excursion))
-        except RuntimeError:
-            stats = opti.stats()
-            status, ok = str(stats.get("return_status", "failed")), False
-            values, e_star = np.asarray(opti.debug.value(X)), math.inf
-        if ok and (best is None or e_star < best[0]):
-            best = (e_star, status, label, values)
-        elif best is None and not ok:
-            last_failed = (status, label, values)
-        if best is not None and best[0] <= EXCURSION_TOLERANCE_M:
-            break  # the body fits: another guess cannot do better
+    load_casadi_ipopt()
+    with one_blas_thread():  # the same answer on any machine's core count (mufusion._threads)
+        for label, start in starts:
+            start()
+            opti.set_initial(excursion, 1.0)
+            try:
+                sol = opti.solve()
+                status, ok = str(sol.stats()["return_status"]), True
+                values = np.asarray(sol.value(X))
+                e_star = float(sol.value(excursion))
+            except RuntimeError:
+                stats = opti.stats()
+                status, ok = str(stats.get("return_status", "failed")), False
+                values, e_star = np.asarray(opti.debug.value(X)), math.inf
+            if ok and (best is None or e_star < best[0]):
+                best = (e_star, status, label, values)
+            elif best is None and not ok:
+                last_failed = (status, label, values)
+            if best is not None and best[0] <= EXCURSION_TOLERANCE_M:
+                break  # the body fits: another guess cannot keep it better
     if best is None:
         status, label, values = last_failed
         return _verdict(math.inf, False, status, label, s, values, curvature, front_m, rear_m,
