@@ -166,8 +166,10 @@ def test_compiled_kernel_steps_equal_the_python_kernel_bitwise(
                  tire_for_surface(mu_r, params.tire, table))
         command: tuple[float, ...] = (float(rng.uniform(-0.3, 0.3)),
                                       *rng.normal(0.0, 5000.0, 2).tolist())
-        if rng.uniform() < 0.5:  # with the stability control's yaw moment and braking force
-            command = (*command, float(rng.normal(0.0, 2e4)), -abs(float(rng.normal(0.0, 1e4))))
+        if rng.uniform() < 0.5:  # with the stability control's yaw moment, braking force and
+            # the front axle's lateral share beside its braked wheel
+            command = (*command, float(rng.normal(0.0, 2e4)), -abs(float(rng.normal(0.0, 1e4))),
+                       float(rng.uniform(0.5, 1.0)))
         speeds = python.wheel_speeds(x.vx_mps, x.vy_mps, x.yaw_rate_radps, x.steer_rad)
         first = python.axles(speeds, x.omega_front_radps, x.omega_rear_radps, mu_f, mu_r, *tires)
         chassis = tuple(x[:6] + x[8:])

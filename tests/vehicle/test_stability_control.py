@@ -207,3 +207,55 @@ def test_a_drift_on_low_friction_is_held_at_the_deadband_where_it_grew_before() 
         final[ret] = -math.atan2(float(out.x[4]), float(out.x[3]))
     assert final[None] > 0.15
     assert final[0.5] < 0.06
+
+
+@given(force=st.floats(0.0, 2e4), more=st.floats(0.0, 2e4), mu=st.floats(0.1, 1.2),
+       truck=st.booleans())
+def test_the_braked_wheel_gives_up_lateral_force_on_the_friction_ellipse(
+    force: float, more: float, mu: float, truck: bool,
+) -> None:
+    params = TRUCK if truck else CAR
+    esc = YawStabilityController(params, StabilityControlSettings())
+    wheel = mu * 0.5 * params.mass_kg * 9.81 * params.cog_to_rear_axle_m / (
+        params.cog_to_front_axle_m + params.cog_to_rear_axle_m)
+    share = esc.front_lateral_share(-force, mu)
+    r = min(force / wheel, 1.0)
+    # The unbraked wheel keeps its half; the braked one keeps √(1 − r²) of its half.
+    assert share == pytest.approx(0.5 + 0.5 * (1.0 - r * r) ** 0.5, rel=1e-12)
+    assert 0.5 <= share <= 1.0
+    assert esc.front_lateral_share(-(force + more), mu) <= share  # more braking, less lateral
+    off = YawStabilityController(params, StabilityControlSettings(braked_wheel_lateral_loss=False))
+    assert off.front_lateral_share(-force, mu) == 1.0
+
+
+def test_the_lost_lateral_force_turns_the_spinning_truck_back_sooner() -> None:
+    # The truck of the test above, its rear out (body slip 0.1 rad against a right turn): the
+    # braked front wheel's lost lateral force takes turning moment off the front axle, so the
+    # yaw rate falls faster than with the braking force on top of the tire forces, and ESC
+    # acts for less time.
+    import math
+
+    runs = {}
+    for loss in (False, True):
+        x0 = initial_state(TRUCK, 0.0, 0.0, 0.0, 15.0)
+        x0[4], x0[5] = 15.0 * math.tan(0.1), -0.6
+        esc = StabilityControlSettings(braked_wheel_lateral_loss=loss)
+        plant = Plant(TRUCK, x0, stability_control=esc)
+        yaw = [float(plant.step(ActuatorCommand(-0.09, 0.0, 0.0), 0.9, 0.9).x[5])
+               for _ in range(200)]
+        runs[loss] = (yaw, plant.stability_control_active_s)
+    (kept, active_kept), (lost, active_lost) = runs[False], runs[True]
+    assert abs(lost[0]) < abs(kept[0])  # from the first step on
+    assert abs(lost[20]) < abs(kept[20]) - 0.02
+    assert active_lost < active_kept
+
+
+def test_the_lateral_loss_is_a_scenario_setting() -> None:
+    assert load_scenario("turn").sim.stability_control() == StabilityControlSettings()
+    assert load_scenario("turn", ["sim.esc_braked_wheel_lateral_loss=false"]
+                         ).sim.stability_control() == StabilityControlSettings(
+                             braked_wheel_lateral_loss=False)
+    with pytest.raises(ValueError, match="esc_braked_wheel_lateral_loss"):
+        load_scenario("turn", ["sim.esc_braked_wheel_lateral_loss=3"])
+    with pytest.raises(ValueError, match="braked_wheel_lateral_loss"):
+        StabilityControlSettings(braked_wheel_lateral_loss=1)  # type: ignore[arg-type]

@@ -290,6 +290,10 @@ class SimSettings(_Strict):
     """With the rear swung out beyond ESC's body-slip deadband, the time [s] in which ESC's
     moment returns the body slip to it (the steering no longer explains the rotation); ``null``
     switches it off, the rule of docs/decisions/0082 (docs/decisions/0115)."""
+    esc_braked_wheel_lateral_loss: bool = True
+    """ESC's braked wheel gives up lateral force for its braking force (the friction ellipse);
+    ``false``: the braking force comes on top of the tire forces, as before
+    docs/decisions/0117."""
     esc_drive_cut: bool = False
     """ESC also withholds drive torque while the rear is swung out beyond its body-slip
     deadband (production ESC's engine intervention); measured, not adopted
@@ -310,8 +314,9 @@ class SimSettings(_Strict):
         """The vehicle's yaw stability control (``None`` with ``esc`` off)."""
         if not self.esc:
             return None
-        return StabilityControlSettings(drive_cut=self.esc_drive_cut,
-                                        body_slip_return_s=self.esc_body_slip_return_s)
+        return StabilityControlSettings(
+            drive_cut=self.esc_drive_cut, body_slip_return_s=self.esc_body_slip_return_s,
+            braked_wheel_lateral_loss=self.esc_braked_wheel_lateral_loss)
 
 
 class InitialPerturbation(_Strict):

@@ -224,8 +224,9 @@ cdef class CompiledPlantKernel:
         double torque_f, double torque_r, double cos_d, double sin_d,
         const Axle* front, const Axle* rear, const double* command, double* out,
     ) noexcept nogil:
-        cdef double fx_front_body = front.fx * cos_d - front.fy * sin_d
-        cdef double fy_front_body = front.fx * sin_d + front.fy * cos_d
+        cdef double fy_f = front.fy * command[5]  # the share ESC's braked wheel leaves
+        cdef double fx_front_body = front.fx * cos_d - fy_f * sin_d
+        cdef double fy_front_body = front.fx * sin_d + fy_f * cos_d
         cdef double m = self.mass
         cdef double cos_p = cos(psi)
         cdef double sin_p = sin(psi)
@@ -309,7 +310,7 @@ cdef class CompiledPlantKernel:
             self._tire_r = tire_struct(tire_r)
             self._tire_r_obj = tire_r
         cdef double x0[9]
-        cdef double cmd[5]
+        cdef double cmd[6]
         cdef double k1[9]
         cdef double k2[9]
         cdef double k3[9]
@@ -320,9 +321,11 @@ cdef class CompiledPlantKernel:
             x0[i] = chassis0[i]
         for i in range(3):
             cmd[i] = command[i]
-        # The stability control's yaw moment and braking force, if given (plant_kernel.Command).
+        # The stability control's yaw moment, braking force and the front axle's lateral share,
+        # if given (plant_kernel.Command).
         cmd[3] = command[3] if len(command) > 3 else 0.0
         cmd[4] = command[4] if len(command) > 3 else 0.0
+        cmd[5] = command[5] if len(command) > 5 else 1.0
         cdef double dt = self.dt, radius = self.radius
         cdef Axle front, rear
         cdef Speeds sp0 = self.wheel_speeds(x0[3], x0[4], x0[5], x0[6])

@@ -232,9 +232,8 @@ class Plant:
         at every step, as on a production vehicle; its status is in ``PlantOutput.slip_control``.
     stability_control
         ``None`` (default): no yaw stability control. Settings: a
-        :class:`~mufusion.vehicle.stability_control.YawStabilityController` (ESC) adds a yaw
-        moment from braking one front wheel when the vehicle rotates faster than its steering
-        asks (``Plant.stability_control_active_s`` sums how long it acted).
+        :class:`~mufusion.vehicle.stability_control.YawStabilityController` (ESC) brakes one
+        front wheel when the vehicle rotates faster than it should (``stability_control_active_s``).
 
     Raises
     ------
@@ -359,7 +358,8 @@ class Plant:
                 speed, x0.yaw_rate_radps, x0.steer_rad, self._accel_y_mps2, mu_front, slip)
             if yaw_moment != 0.0:
                 self._esc.active_s += self.dt_s
-        kernel_cmd: tuple[float, ...] = (*cmd, yaw_moment, force_x) if yaw_moment else cmd
+        kernel_cmd: tuple[float, ...] = (*cmd, yaw_moment, force_x, self._esc.front_lateral_share(
+            force_x, mu_front)) if self._esc is not None and yaw_moment else cmd
         # The surface under each axle is held over the step (μ is too).
         tire_f = tire_for_surface(mu_front, p.tire, self.surface_tires)
         tire_r = tire_for_surface(mu_rear, p.tire, self.surface_tires)

@@ -41,9 +41,9 @@ KERNEL_KINDS: tuple[str, ...] = get_args(KernelKind)
 StepResult = tuple[tuple[float, ...], tuple[AxleFloats, AxleFloats], float, float]
 
 # The actuators' command ``(steer_rad, torque_front_nm, torque_rear_nm)``, optionally followed by
-# the stability control's ``(yaw_moment_nm, force_x_n)``: the direct yaw moment and the
-# longitudinal body force of the wheel it brakes (single-track representation of differential
-# braking; :mod:`mufusion.vehicle.stability_control`). Three floats: no such moment.
+# the stability control's ``(yaw_moment_nm, force_x_n, front_lateral_share)``: the direct yaw
+# moment, the longitudinal body force of the wheel it brakes and the share of the front axle's
+# lateral force left beside it (single-track differential braking; stability_control.py).
 Command = tuple[float, ...]
 
 
@@ -210,13 +210,13 @@ class PlantKernel:
         command: Command,
     ) -> tuple[float, ...]:
         """``plant._chassis_rates`` of a chassis state, without the wheel-spin rates."""
-        fx_f, fy_f, fx_r, fy_r = front[0], front[1], rear[0], rear[1]
+        yaw_moment, force_x, lateral = command[3:6] if len(command) > 3 else (0.0, 0.0, 1.0)
+        fx_f, fy_f, fx_r, fy_r = front[0], front[1] * lateral, rear[0], rear[1]
         fx_front_body = fx_f * cos_d - fy_f * sin_d
         fy_front_body = fx_f * sin_d + fy_f * cos_d
         m = self.mass
         cos_p, sin_p = _cos(psi), _sin(psi)
         steer_cmd, torque_f_cmd, torque_r_cmd = command[0], command[1], command[2]
-        yaw_moment, force_x = (command[3], command[4]) if len(command) > 3 else (0.0, 0.0)
         max_rate = self.max_steer_rate
         steer_rate = (steer_cmd - steer) / self.steer_tau
         # min(max(rate, -max_rate), max_rate)

@@ -7,7 +7,9 @@ years of experience", SAE 2000-01-1633; Rajamani, *Vehicle Dynamics and Control*
 plant is single-track, so the braking appears as it does in single-track ESC models: a direct yaw
 moment ``M_z`` about the centre of gravity and the longitudinal force ``|M_z| / (t/2)`` of the
 braked wheel. That wheel can deliver at most its friction, ``μ F_z,wheel`` (its ABS keeps it near
-the peak), which bounds the moment; its lost lateral force is not represented.
+the peak), which bounds the moment, and it gives up lateral force for it, on the friction
+ellipse: half of the front axle's lateral force scales with ``√(1 − r²)``, ``r = F_x / μ
+F_z,wheel`` (at the bound that wheel steers no more; docs/decisions/0117).
 
 Two yaw rates explain a vehicle's rotation: the single-track steady state for the measured
 steering angle and speed, ``v δ / L`` (both presets' tires have the same stiffness per unit load
@@ -70,14 +72,21 @@ class StabilityControlSettings:
     the moment grows from zero at it). Production ESC bounds the body slip as well as the yaw
     rate (van Zanten, SAE 2000-01-1633); docs/decisions/0115. ``None``: the rule before (the
     larger of the two rates, beyond the yaw-rate deadband)."""
+    braked_wheel_lateral_loss: bool = True
+    """The braked wheel gives up lateral force for the braking force it delivers: its lateral
+    force scales with the friction ellipse, ``√(1 − (F_x / μ F_z,wheel)²)``, so the front axle
+    keeps ``(1 + √(1 − r²)) / 2`` of its lateral force at ``r = F_x / μ F_z,wheel``
+    (:meth:`YawStabilityController.front_lateral_share`; docs/decisions/0117). ``False``: the
+    braking force comes on top of the axle's tire forces, as before 0117."""
     drive_cut: bool = False
     """Also withhold drive torque while the body slip points against the rotation beyond
     ``body_slip_deadband_rad`` (the rear swung out): production ESC's engine intervention
     (docs/decisions/0092)."""
 
     def __post_init__(self) -> None:
-        if not isinstance(self.drive_cut, bool):
-            raise ValueError(f"drive_cut must be true or false, got {self.drive_cut!r}")
+        for name in ("drive_cut", "braked_wheel_lateral_loss"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if self.body_slip_return_s is not None and not (
                 isinstance(self.body_slip_return_s, (int, float))
                 and not isinstance(self.body_slip_return_s, bool)
@@ -85,7 +94,7 @@ class StabilityControlSettings:
             raise ValueError("body_slip_return_s must be a finite number > 0 s or None, got "
                              f"{self.body_slip_return_s!r}")
         for f in fields(self):
-            if f.name in ("drive_cut", "body_slip_return_s"):
+            if f.name in ("drive_cut", "braked_wheel_lateral_loss", "body_slip_return_s"):
                 continue
             value = getattr(self, f.name)
             if isinstance(value, bool) or not (
@@ -130,6 +139,23 @@ class YawStabilityController:
         return (speed_mps > cfg.min_speed_mps
                 and -body_slip_rad * math.copysign(1.0, yaw_rate_radps)
                 > cfg.body_slip_deadband_rad)
+
+    def front_lateral_share(self, force_x_n: float, mu_front: float) -> float:
+        """The share of the front axle's lateral force left while one front wheel brakes with
+        ``force_x_n`` [N] on friction ``mu_front``: ``(1 + √(1 − r²)) / 2`` with ``r = |F_x| /
+        μ F_z,wheel`` (at most 1, the moment's bound), 1 with ``braked_wheel_lateral_loss``
+        off. The other front wheel keeps its half; the braked one's lateral force scales on the
+        friction ellipse.
+
+        >>> from mufusion.vehicle.params import CAR
+        >>> esc = YawStabilityController(CAR, StabilityControlSettings())
+        >>> esc.front_lateral_share(0.0, 0.8), esc.front_lateral_share(-1e9, 0.8)
+        (1.0, 0.5)
+        """
+        if not self.settings.braked_wheel_lateral_loss:
+            return 1.0
+        r = min(abs(force_x_n) / (mu_front * self._front_wheel_load_n), 1.0)
+        return 0.5 * (1.0 + math.sqrt(1.0 - r * r))
 
     def moment(
         self, speed_mps: float, yaw_rate_radps: float, steer_rad: float, accel_y_mps2: float,
