@@ -138,7 +138,10 @@ def test_gt_recovers_from_the_slide_it_spun_in_with_the_linear_rear_tire() -> No
     # brakes on the front and recovers in the lane's neighbourhood. Measured with the front
     # polygon at the centre of gravity's μ̂: at the front axle's (0112, the default) the plans
     # no longer slide there (tests/planner/test_axle_friction.py); and with ESC of 0082: its
-    # body-slip return (0115) catches the linear tire's slide too (the car stays in its lane).
+    # body-slip return (0115) catches the linear tire's slide too (the car stays in its lane),
+    # and with its braked wheel's lateral force on top of the tire forces, as before 0117 (with
+    # it lost: the linear tire spins, 2.93 m out without the minimal-risk stop; the saturated
+    # one does not spin, 1.55 m out).
     from mufusion.metrics import compute_metrics
     from mufusion.scenarios import load_scenario
     from mufusion.scenarios.runner import run_scenario
@@ -147,7 +150,7 @@ def test_gt_recovers_from_the_slide_it_spun_in_with_the_linear_rear_tire() -> No
             "turn.angle_rad=1.5708", "turn.start_ahead_m=20", "turn.clothoid_m=5",
             "turn.direction=left", "friction.mu_before=0.9", "friction.mu_turn=0.3",
             "friction.change_ahead_m=10", "planner.front_axle_polygon=false",
-            "sim.esc_body_slip_return_s=null"]
+            "sim.esc_body_slip_return_s=null", "sim.esc_braked_wheel_lateral_loss=false"]
     outcome = {
         on: compute_metrics(run_scenario(load_scenario(
             "turn", [*base, f"planner.rear_saturation={str(on).lower()}"]), "GT"))
