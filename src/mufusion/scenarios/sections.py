@@ -281,6 +281,10 @@ class SimSettings(_Strict):
     production car and truck; ``false`` shows what it does."""
     tcs: bool = True
     """Traction control in the vehicle (the same controller on drive torque)."""
+    abs_rise_recognition: bool = True
+    """ABS ends a cycle's build-up when the road returns a fifth more than it did before the
+    wheel ran away (a friction rise) instead of climbing to the command at the low friction's
+    rate; ``false``: the build-up of docs/decisions/0052 (docs/decisions/0118)."""
     esc: bool = True
     """Yaw stability control in the vehicle (:mod:`mufusion.vehicle.stability_control`): a yaw
     moment from braking one front wheel when the vehicle rotates faster than its steering asks,
@@ -307,7 +311,8 @@ class SimSettings(_Strict):
         """The vehicle's wheel-slip control (``None`` with ABS and TCS both off)."""
         if not (self.abs or self.tcs):
             return None
-        return SlipControlSettings(abs_enabled=self.abs, tcs_enabled=self.tcs)
+        return SlipControlSettings(abs_enabled=self.abs, tcs_enabled=self.tcs,
+                                   rise_recognition=self.abs_rise_recognition)
 
 
     def stability_control(self) -> StabilityControlSettings | None:

@@ -27,8 +27,9 @@ per axle, in four phases:
 ``REAPPLY``
     The torque jumps back to ``reapply_fraction`` of the torque at which the wheel began to lock
     (or stays at the held one, if higher) and builds up by that torque every ``reapply_time_s``;
-    the cycle ends when the command is reached (back to ``PASS``), or a new one starts when the
-    wheel runs away again.
+    the cycle ends when the command is reached (back to ``PASS``), or when the road returns more
+    than its peak before the wheel ran away (a friction rise, ``rise_recognition``), or a new
+    one starts when the wheel runs away again.
 
 Traction control is the same machine on drive torque with the signs mirrored (a spinning wheel
 instead of a locking one). The reference speed is the front wheel's while nothing brakes (neither
@@ -218,6 +219,7 @@ class WheelSlipController:
             self._rear.reset()
             return command, self._status(PASSIVE_AXLE, PASSIVE_AXLE)
         denominator = max(reference, 1.0)
+        inertia_per_radius = self.params.wheel_inertia_kgm2 / radius
         out = []
         statuses = []
         for machine, asked, applied, wheel, before in (
@@ -225,13 +227,17 @@ class WheelSlipController:
             (self._rear, asked_r, torque_rear_nm, wheel_r, previous[1]),
         ):
             slip = (wheel - reference) / denominator
-            relative_accel = (wheel - before) / dt - accel_x_mps2
+            wheel_accel = (wheel - before) / dt
+            relative_accel = wheel_accel - accel_x_mps2
+            # The torque the road returns: the applied one less what turns the wheel, I ω̇.
+            road = applied - inertia_per_radius * wheel_accel
             if asked < 0.0 and cfg.abs_enabled:
                 magnitude = machine.step(time_s, -asked, max(-applied, 0.0), -slip,
-                                         -relative_accel)
+                                         -relative_accel, -road)
                 torque = -magnitude
             elif asked > 0.0 and cfg.tcs_enabled:
-                magnitude = machine.step(time_s, asked, max(applied, 0.0), slip, relative_accel)
+                magnitude = machine.step(time_s, asked, max(applied, 0.0), slip, relative_accel,
+                                         road)
                 torque = magnitude
             else:
                 machine.reset()

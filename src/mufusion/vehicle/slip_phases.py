@@ -54,6 +54,16 @@ class SlipControlSettings:
         How much faster than the IMU's deceleration the reference speed may fall while braking,
         to follow wheels that decelerate within their grip [m/s²], > 0 (the IMU misses the
         curve's ``ψ̇ v_y``; a locking wheel decelerates many times faster).
+    rise_recognition
+        End a cycle's build-up when the road returns more than the most it had returned before
+        the wheel last ran away, by ``rise_margin`` of that (a friction rise: built up at the
+        low friction's rate the brake would take a second to reach what the new road holds,
+        "sail-on"; docs/decisions/0118). The road's
+        torque is the applied one less what turns the wheel, ``T − I ω̇`` (brake pressure and
+        wheel-speed signal). ``False``: the build-up keeps its rate up to the command.
+    rise_margin
+        Share by which the road's torque must exceed that most [-], > 0 (on one road it cannot
+        exceed the force peak the wheel went through but by the load's changes).
     """
 
     abs_enabled: bool = True
@@ -67,6 +77,8 @@ class SlipControlSettings:
     reapply_time_s: float = 0.3
     min_speed_mps: float = 2.0
     reference_decel_margin_mps2: float = 2.0
+    rise_recognition: bool = True
+    rise_margin: float = 0.2
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -92,7 +104,7 @@ class SlipControlSettings:
             raise ValueError(
                 f"reapply_fraction must be in (0, 1], got {self.reapply_fraction!r}")
         for name in ("wheel_accel_margin_mps2", "max_hold_s", "reapply_time_s",
-                     "reference_decel_margin_mps2"):
+                     "reference_decel_margin_mps2", "rise_margin"):
             if not getattr(self, name) > 0.0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
         if not self.min_speed_mps >= 0.0:
@@ -104,7 +116,7 @@ class AxlePhaseMachine:
     """One axle's phase machine on torque magnitudes (brake or drive, signs taken off): the four
     phases of :mod:`mufusion.vehicle.slip_control`'s docstring."""
 
-    __slots__ = ("cycles", "held", "lock", "phase", "settings", "since")
+    __slots__ = ("cycles", "grip", "held", "lock", "phase", "run_up", "settings", "since")
 
     def __init__(self, settings: SlipControlSettings) -> None:
         self.settings = settings
@@ -113,19 +125,28 @@ class AxlePhaseMachine:
         self.held = 0.0  # torque the current hold or reapply starts from [N m]
         self.since = 0.0  # when the current phase began [s]
         self.cycles = 0
+        # The road's largest torque since the command began in this direction (the peak the
+        # wheel went through before it first ran away, and any since) [N m].
+        self.run_up = 0.0
+        self.grip = 0.0  # that torque when the wheel last ran away [N m]
 
     def reset(self) -> None:
         self.phase = SlipPhase.PASS
+        self.run_up = 0.0
 
-    def step(self, t: float, asked: float, applied: float, excess: float, runaway: float) -> float:
+    def step(self, t: float, asked: float, applied: float, excess: float, runaway: float,
+             road: float = 0.0) -> float:
         """Torque magnitude to command [N m].
 
         ``asked``: the command's magnitude; ``applied``: the actuator's torque magnitude now;
         ``excess``: the slip in the command's direction (braking: −λ); ``runaway``: how much
-        faster than the body the wheel's circumference moves in that direction [m/s²].
+        faster than the body the wheel's circumference moves in that direction [m/s²];
+        ``road``: the torque the road returns in that direction, ``T − I ω̇`` [N m].
         """
         cfg = self.settings
         phase = self.phase
+        if phase is not SlipPhase.RELEASE and road > self.run_up:
+            self.run_up = road
         if phase is SlipPhase.RELEASE:
             # Dump until the wheel clearly spins up again (or its slip has recovered already).
             if runaway < -cfg.wheel_accel_margin_mps2 or excess < cfg.recovered_slip:
@@ -144,6 +165,13 @@ class AxlePhaseMachine:
             return self._release(t, applied)
         if phase is SlipPhase.PASS:
             return asked
+        if cfg.rise_recognition and road > (1.0 + cfg.rise_margin) * self.grip:
+            # On one road the wheel cannot take more than the peak it went through before it ran
+            # away (but by its load's changes): the road now grips more, a friction rise. Built
+            # up at the low friction's rate the torque would take a second to reach what the new
+            # road holds.
+            self.phase = SlipPhase.PASS
+            return asked
         # Straight back to a share of the torque that locked the wheel (the peak lies below it,
         # not far), then slowly on towards and past it.
         start = max(self.held, cfg.reapply_fraction * self.lock)
@@ -157,4 +185,5 @@ class AxlePhaseMachine:
         """A new cycle: remember the torque that was too much, and dump it."""
         self.phase, self.since, self.cycles = SlipPhase.RELEASE, t, self.cycles + 1
         self.lock = max(applied, 1e-3)
+        self.grip = self.run_up
         return 0.0
