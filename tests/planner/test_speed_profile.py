@@ -213,6 +213,27 @@ def test_regaining_speed_in_a_curve_by_hand() -> None:
     np.testing.assert_allclose(at_limit, math.sqrt(a), rtol=1e-7)  # rounding of v²κ/a at 1
 
 
+def test_regain_within_a_share_of_the_lateral_friction_by_hand() -> None:
+    s = np.array([0.0, 1.0, 2.0])
+    kappa, mu, frac = np.full(3, 1 / 28), np.full(3, 0.9), 0.9 * math.cos(math.pi / 12)
+    a = frac * 0.9 * GRAVITY_MPS2  # 7.6762 m/s²
+    # 13.4 m/s on R 28 m is 6.41 m/s² lateral: within the whole friction, beyond 0.8 of it.
+    beyond = regain_limited_profile_mps(s, kappa, mu, frac, np.full(3, 14.66), 13.4, 1.5, 0.8)
+    np.testing.assert_array_equal(beyond, 13.4)
+    # 12 m/s is 5.14 m/s² lateral, within 0.8 a = 6.14 m/s²: the ellipse against 0.8 a.
+    within = regain_limited_profile_mps(s, kappa, mu, frac, np.full(3, 14.66), 12.0, 1.5, 0.8)
+    ellipse = math.sqrt(1 - (12.0**2 / 28 / (0.8 * a)) ** 2)
+    assert within[1] == pytest.approx(math.sqrt(12.0**2 + 2 * 1.5 * ellipse), rel=1e-12)
+    whole = regain_limited_profile_mps(s, kappa, mu, frac, np.full(3, 14.66), 12.0, 1.5)
+    assert within[1] < whole[1]
+    # On a straight the share changes nothing; the share is validated.
+    straight = regain_limited_profile_mps(s, np.zeros(3), mu, frac, np.full(3, 14.66), 12.0, 1.5,
+                                          0.8)
+    assert straight[1] == pytest.approx(math.sqrt(12.0**2 + 3.0), rel=1e-12)
+    with pytest.raises(ValueError, match="share"):
+        regain_limited_profile_mps(s, kappa, mu, frac, np.full(3, 14.66), 12.0, 1.5, 0.0)
+
+
 def _random_road(data, n: int):
     """A 1 m grid of ``n`` points with drawn curvatures and frictions, and its profile."""
     s = np.arange(float(n))
@@ -251,6 +272,20 @@ def test_no_speed_is_regained_before_the_lowest_point_below_the_vehicle(start, d
         assert np.all(v >= v[0] - 1e-12)
 
 
+@settings(max_examples=100, deadline=None)
+@given(start=st.floats(0.0, 30.0), share=st.floats(0.3, 1.0), data=st.data(),
+       n=st.integers(2, 60))
+def test_no_speed_is_regained_while_cornering_beyond_the_share(start, share, data, n) -> None:
+    s, kappa, mu, profile = _random_road(data, n)
+    v = regain_limited_profile_mps(s, kappa, mu, 0.9, profile, start, 1.5, share)
+    lateral = v[:-1] ** 2 * np.maximum(np.abs(kappa[:-1]), np.abs(kappa[1:]))
+    beyond = lateral >= share * 0.9 * mu[:-1] * GRAVITY_MPS2
+    # Cornering at or beyond the share, the next point is never faster than this one.
+    assert np.all(v[1:][beyond] <= v[:-1][beyond])
+    # And the share never asks for more speed than the whole friction's ellipse.
+    assert v[1] <= regain_limited_profile_mps(s, kappa, mu, 0.9, profile, start, 1.5)[1]
+
+
 def test_a_vehicle_below_the_ramp_to_a_curve_holds_its_speed() -> None:
     # 16 m/s, 40 m before an arc whose limit on μ̂ 0.9 is 14.2 m/s, cruise speed 18 m/s: the
     # braking ramp towards the arc is above the vehicle for its first metres. Before it the
@@ -259,7 +294,7 @@ def test_a_vehicle_below_the_ramp_to_a_curve_holds_its_speed() -> None:
     curve = lambda s: np.where(np.asarray(s, dtype=float) >= 40.0, 1 / 28, 0.0)  # noqa: E731
     stages = np.linspace(0.0, 60.0, 41)
     ref = curve_speed_reference_mps(stages, curve, _mu(0.9), 18.0, 0.9, 4.0, 0.8,
-                                    regain=(16.0, 1.5))
+                                    regain=(16.0, 1.5, 1.0))
     unlimited = curve_speed_reference_mps(stages, curve, _mu(0.9), 18.0, 0.9, 4.0, 0.8)
     assert unlimited[0] > 16.5  # the ramp lies above the vehicle here
     assert ref[0] == pytest.approx(16.0)

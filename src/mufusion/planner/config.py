@@ -163,6 +163,10 @@ class PlannerConfig:
     # The reference regains speed from the vehicle's own no faster than the cruise traction cap
     # on the g-g ellipse allows (planner/speed_profile.py, ``regain_limited_profile_mps``).
     reference_regain_limit: bool = True
+    # The regain's ellipse spans only the share of the lateral friction the braking ramps use
+    # (``reference_braking_fraction``): cornering beyond it the reference asks for no drive, and
+    # the driven axle keeps its reserve for the plans' lateral corrections (docs/decisions/0119).
+    reference_regain_share: bool = True
     # The reference's braking ramps brake with what the vehicle's two axles reach beside the
     # curve's lateral force, pitch load transfer counted (planner/axle_reach.py), instead of the
     # point mass's √(a² − a_y²). Off: measured, not adopted (the edge draws' spin 2.15 m ->

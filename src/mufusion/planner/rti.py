@@ -147,7 +147,8 @@ def iterate(
             speed_ref = curve_speed_reference_mps(
                 guess_x[:, State.s], kappa_ref, mu_ref, reference_speed_mps, accel_fraction,
                 cfg.horizon_steps * cfg.dt_s, cfg.reference_braking_fraction,
-                (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2)
+                (max(float(x0[State.vx]), 0.0), cfg.max_cruise_accel_mps2,
+                 cfg.reference_braking_fraction if cfg.reference_regain_share else 1.0)
                 if cfg.reference_regain_limit and mode == "cruise" else None,
                 unseen,
                 # With ``reference_load_transfer`` (off: measured, not adopted) the ramps brake

@@ -154,18 +154,22 @@ def regain_limited_profile_mps(
     profile_mps: np.ndarray,
     start_speed_mps: float,
     max_accel_mps2: float,
+    share: float = 1.0,
 ) -> np.ndarray:
     """``profile_mps`` capped by how fast a point mass from ``start_speed_mps`` regains speed.
 
     The forward pass of a speed profile: from the start, each grid step may add speed with
-    ``a_x ≤ max_accel_mps2 · √(1 − (v² |κ| / a)²)``, ``a = accel_fraction · μ g``, the g-g ellipse
-    whose semi-axes are the drive's acceleration cap and the lateral friction (on a straight the
-    whole cap, at the lateral limit nothing). A vehicle below the profile inside a curve is then
-    asked to regain speed only as fast as its cornering leaves friction for it, instead of at
-    once. Where the profile somewhere ahead lies below the start speed, no speed is added before
-    its (first) lowest point: a vehicle that is below the braking ramp towards a curve, e.g.
-    after a friction probe or a rise of μ̂, holds its speed until the ramp meets it instead of
-    speeding up to brake harder later.
+    ``a_x ≤ max_accel_mps2 · √(1 − (v² |κ| / (b a))²)``, ``a = accel_fraction · μ g``,
+    ``b = share``, the g-g ellipse whose semi-axes are the drive's acceleration cap and the share
+    ``b`` of the lateral friction (on a straight the whole cap, cornering at ``b a`` or beyond
+    nothing). A vehicle below the profile inside a curve is then asked to regain speed only as
+    fast as its cornering leaves friction for it, instead of at once; with ``b < 1`` the
+    reference asks for no drive at all while the plans corner beyond the share the braking ramps
+    use, which keeps the driven axle's reserve for the plans' lateral corrections
+    (docs/decisions/0119). Where the profile somewhere ahead lies below the start speed, no
+    speed is added before its (first) lowest point: a vehicle that is below the braking ramp
+    towards a curve, e.g. after a friction probe or a rise of μ̂, holds its speed until the ramp
+    meets it instead of speeding up to brake harder later.
 
     Parameters
     ----------
@@ -177,6 +181,8 @@ def regain_limited_profile_mps(
         Speed at the first grid point [m/s], ≥ 0.
     max_accel_mps2
         The drive's acceleration cap [m/s²], > 0.
+    share
+        Share ``b`` of the friction's lateral reach the regain's ellipse spans, in (0, 1].
 
     Returns
     -------
@@ -199,8 +205,10 @@ def regain_limited_profile_mps(
     if not start_speed_mps >= 0.0 or not max_accel_mps2 > 0.0:
         raise ValueError("start_speed_mps must be >= 0 and max_accel_mps2 > 0, got "
                          f"{start_speed_mps!r} and {max_accel_mps2!r}")
-    s_arr, kappa_arr, accel_arr, cap_arr = _pass_arrays(s_m, curvature_1pm, mu, accel_fraction,
-                                                        profile_mps)
+    if not 0.0 < share <= 1.0:
+        raise ValueError(f"share must be in (0, 1], got {share!r}")
+    s_arr, kappa_arr, accel_arr, cap_arr = _pass_arrays(s_m, curvature_1pm, mu,
+                                                        share * accel_fraction, profile_mps)
     cap = cap_arr.tolist()
     w = min(start_speed_mps * start_speed_mps, cap[0])
     # Where the profile ahead falls below the vehicle's speed, the way to its lowest point is a
@@ -303,7 +311,7 @@ def curve_speed_reference_mps(
     accel_fraction: float,
     horizon_time_s: float,
     braking_fraction: float = 1.0,
-    regain: tuple[float, float] | None = None,
+    regain: tuple[float, float, float] | None = None,
     unseen: tuple[MuOfS, float] | None = None,
     transfer: PitchTransfer | None = None,
 ) -> np.ndarray:
@@ -312,7 +320,7 @@ def curve_speed_reference_mps(
     The profile runs from the first stage over the horizon's reach at the cruise speed plus the
     stopping distance from it at the lowest μ̂ ahead (at most :data:`MAX_LOOKAHEAD_M`), so a
     curve beyond the horizon already lowers the reference of its last stages. ``regain``
-    ``(start_speed_mps, max_accel_mps2)`` also caps it by :func:`regain_limited_profile_mps`
+    ``(start_speed_mps, max_accel_mps2, share)`` caps it by :func:`regain_limited_profile_mps`
     from the vehicle's speed at the first stage. ``unseen`` ``(mu_of_s, start_speed_mps)``, the
     friction with the road beyond the estimate at its floor (:meth:`UnseenRoad.cap`), caps it
     also by that friction's profile, lowered from the vehicle's speed no faster than

@@ -88,6 +88,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         exact_body_reach=cfg.planner.exact_body_reach,
         lane_slack_lead=cfg.planner.lane_slack_lead,
         reference_regain_limit=cfg.planner.reference_regain_limit,
+        reference_regain_share=cfg.planner.reference_regain_share,
         reference_load_transfer=cfg.planner.reference_load_transfer,
         reference_drive_cap=cfg.planner.reference_drive_cap,
         steering_rate_limit=cfg.planner.steering_rate_limit,

@@ -211,6 +211,10 @@ class PlannerSettings(_Strict):
     """In cruise, the speed reference regains speed from the vehicle's own no faster than the
     drive's acceleration cap on the g-g ellipse allows (less while cornering); ``false``: the
     reference jumps back to the profile's speed."""
+    reference_regain_share: bool = PlannerConfig.reference_regain_share
+    """The regain spans only ``reference_braking_fraction`` of the lateral friction: cornering
+    beyond that share, the reference asks for no drive (docs/decisions/0119); ``false``: the
+    regain's ellipse spans the whole lateral friction."""
     reference_load_transfer: bool = PlannerConfig.reference_load_transfer
     """The speed reference's braking ramps brake with what the vehicle's two axles reach beside
     the curve's lateral force, pitch load transfer counted
