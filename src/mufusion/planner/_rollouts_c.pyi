@@ -9,6 +9,7 @@ def rollouts(
     v_t: np.ndarray,
     curvature_of_s: Callable[[np.ndarray], np.ndarray | float],
     mu_hat_of_s: Callable[[np.ndarray], np.ndarray | float],
-    stiffness_of: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    stiffness_of: Callable[[np.ndarray, np.ndarray], np.ndarray] | None,
     constants: tuple[float, ...],
+    stiffness_per_load: float = 0.0,
 ) -> None: ...

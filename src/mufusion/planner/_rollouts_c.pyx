@@ -57,12 +57,15 @@ def rollouts(
     mu_hat_of_s,
     stiffness_of,
     tuple constants,
+    double stiffness_per_load=0.0,
 ):
     """Fill ``xs (N+1, 6, M)`` (``xs[0]`` given) and ``us (N, 3, M)`` as the numpy roll-out does.
 
     ``curvature_of_s`` and ``mu_hat_of_s`` map the candidates' ``s`` to arrays of shape ``(M,)``;
-    ``stiffness_of(rear_load, mu)`` gives the rear cornering stiffness; ``constants`` are the
-    Python floats the numpy code computes with (see ``sampling._rollout_constants``).
+    ``stiffness_of(rear_load, mu)`` gives the rear cornering stiffness, or, ``None``, it is
+    ``stiffness_per_load`` times the rear load (the vehicle's tire: numpy's product of a float and
+    an array, the same IEEE multiplication here); ``constants`` are the Python floats the numpy
+    code computes with (see ``sampling._rollout_constants``).
     """
     cdef double m, lf, lr, iz, min_slip_speed, g_lr, g_lf, h, wheelbase, share_front
     cdef double share_front_m, yaw_term, speed_force, min_lookahead, lookahead_time
@@ -81,9 +84,14 @@ def rollouts(
     cdef double[::1] fzr = np.empty(n)
     cdef double[::1] mu_stiffness = np.empty(n)
     cdef double[::1] v = np.empty(n)
-    cdef double[::1] kappa, mu, c_r, dpsi_des, sin_dpsi, cos_dpsi
+    cdef double[::1] kappa, mu, c_r, dpsi_des
     cdef object offset = np.empty(n), lookahead = np.empty(n), dpsi = np.empty(n)
     cdef double[::1] offset_v = offset, lookahead_v = lookahead, dpsi_v = dpsi
+    # numpy's sin, cos and arctan2 write into these (the same values as into new arrays).
+    cdef object sin_out = np.empty(n), cos_out = np.empty(n), atan_out = np.empty(n)
+    cdef double[::1] sin_dpsi = sin_out, cos_dpsi = cos_out
+    cdef bint fixed_tire = stiffness_of is None
+    cdef double[::1] c_r_fixed = np.empty(n)
     cdef double[:, ::1] x, u, x_next
     cdef double[:, :, ::1] ks = np.empty((4, 6, n))
     cdef double[:, ::1] x_stage = np.empty((6, n))
@@ -102,8 +110,13 @@ def rollouts(
             mu_stiffness[j] = mu[j] if (mu[j] - mu[j] == 0.0 and mu[j] > 0.0) else 1.0
             lookahead_v[j] = nmax(min_lookahead, lookahead_time * v[j])
             offset_v[j] = d_t[j] - x[1, j]
-        c_r = _per_candidate(stiffness_of(np.asarray(fzr), np.asarray(mu_stiffness)), n)
-        dpsi_des = np.arctan2(offset, lookahead)
+        if fixed_tire:
+            for j in range(n):
+                c_r_fixed[j] = stiffness_per_load * fzr[j]
+            c_r = c_r_fixed
+        else:
+            c_r = _per_candidate(stiffness_of(np.asarray(fzr), np.asarray(mu_stiffness)), n)
+        dpsi_des = np.arctan2(offset, lookahead, out=atan_out)
         for j in range(n):
             vx = x[4, j]
             fzf = m * (g_lr - ax[j] * h) / wheelbase
@@ -136,8 +149,8 @@ def rollouts(
                     for j in range(n):
                         x_stage[i, j] = x[i, j] + scale * ks[stage - 1, i, j]
             dpsi_v[:] = x_stage[2]
-            sin_dpsi = np.sin(dpsi)
-            cos_dpsi = np.cos(dpsi)
+            np.sin(dpsi, out=sin_out)
+            np.cos(dpsi, out=cos_out)
             dynamics(x_stage, u, kappa, c_r, sin_dpsi, cos_dpsi, dyn, ks[stage], n)
         x_next = xs[step + 1]
         for i in range(6):

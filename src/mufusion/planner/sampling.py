@@ -248,16 +248,13 @@ def candidate_rollouts(
                 "lacks (reinstall with `pip install -e .`)"
             ) from exc
 
-        stiffness_of: Callable[[np.ndarray, np.ndarray], np.ndarray]
-        if stiffness_table is None:
-            # The vehicle's tire: the stiffness is its load times a factor that μ̂ does not
-            # change, computed once here instead of at each of the 40 steps (factor · 1 = the
-            # factor, so each step's product is the one the full call makes).
-            per_load = rear_cornering_stiffness_n_per_rad(params, 1.0, utilization_factor)
-
-            def stiffness_of(rear_load_n: np.ndarray, mu: np.ndarray) -> np.ndarray:
-                return per_load * rear_load_n
-        else:
+        stiffness_of: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
+        # The vehicle's tire: the stiffness is its load times a factor that μ̂ does not change,
+        # computed once here and multiplied in the loop (factor · 1 = the factor, so each step's
+        # product is the one the full call makes).
+        per_load = (float(rear_cornering_stiffness_n_per_rad(params, 1.0, utilization_factor))
+                    if stiffness_table is None else 0.0)
+        if stiffness_table is not None:
             def stiffness_of(rear_load_n: np.ndarray, mu: np.ndarray) -> np.ndarray:
                 return rear_cornering_stiffness_n_per_rad(
                     params, rear_load_n, utilization_factor, mu_hat=mu, table=stiffness_table
@@ -266,7 +263,7 @@ def candidate_rollouts(
         rollouts(
             xs, us, np.ascontiguousarray(d_t, dtype=float),
             np.ascontiguousarray(v_t, dtype=float), curvature_of_s, mu_hat_of_s, stiffness_of,
-            _rollout_constants(params, utilization_factor, dt_s, config),
+            _rollout_constants(params, utilization_factor, dt_s, config), per_load,
         )
         return xs, us
     workspace = RK4Workspace.for_states(xs[0].shape)
