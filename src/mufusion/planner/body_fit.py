@@ -26,6 +26,7 @@ from collections.abc import Callable
 import numpy as np
 
 from mufusion.planner.corridor import reach_taken_m
+from mufusion.planner.rear_secant import secant_fit_table
 from mufusion.vehicle.params import VehicleParams
 from mufusion.vehicle.planner_model import rear_cornering_stiffness_n_per_rad
 from mufusion.vehicle.surface_tires import SurfaceTireTable
@@ -73,11 +74,14 @@ def fitting_heading_table(params: VehicleParams, band_m: float, exact_reach: boo
 
 def body_fit_cap(params: VehicleParams, band_m: float, utilization_factor: float,
                  exact_reach: bool = False,
-                 surface_tires: SurfaceTireTable | None = None) -> CapOfMuKappa:
+                 surface_tires: SurfaceTireTable | None = None,
+                 secant_reserve: float | None = None) -> CapOfMuKappa:
     """The cap ``u(μ̂, κ)`` at which the plans' steady attitude (their linear rear tire, secant
     at ``utilization_factor``; ``surface_tires``' stiffness at μ̂ where the planner follows a
     table) still leaves the corridor in ``band_m`` a width; 1 where the corridor is empty at any
-    attitude (nothing the speed can do) or the tire limits first.
+    attitude (nothing the speed can do) or the tire limits first. ``secant_reserve`` (the
+    vehicle's own tire only): the rear tire's secant at ``min(λ, u + reserve)`` instead, as the
+    cruising plans take it (:mod:`mufusion.planner.rear_secant`; docs/decisions/0121).
 
     Examples
     --------
@@ -94,6 +98,9 @@ def body_fit_cap(params: VehicleParams, band_m: float, utilization_factor: float
     # The vehicle's own tire: one stiffness per load whatever μ̂ (a table's follows μ̂).
     fixed = (None if surface_tires is not None
              else float(rear_cornering_stiffness_n_per_rad(params, 1.0, utilization_factor)))
+    tangent = params.tire.cornering_stiffness_per_load_1_per_rad
+    fit = (None if secant_reserve is None or fixed is None
+           else secant_fit_table(params.tire, float(utilization_factor), float(secant_reserve)))
 
     def cap(mu_hat: np.ndarray, curvature_1pm: np.ndarray) -> np.ndarray:
         mu = np.maximum(np.asarray(mu_hat, dtype=float), 1e-3)
@@ -104,7 +111,11 @@ def body_fit_cap(params: VehicleParams, band_m: float, utilization_factor: float
             rear_cornering_stiffness_n_per_rad(params, np.ones_like(mu), utilization_factor,
                                                mu_hat=mu, table=surface_tires), dtype=float)
         with np.errstate(invalid="ignore"):
-            u = np.where(slip > 0.0, slip * per_load / mu, np.nan)
+            if fit is not None:  # u μ̂ = slip K f(min(λ, u + δ)), solved on its table
+                demand = np.where(slip > 0.0, slip * tangent / mu, np.nan)
+                u = np.where(demand <= fit[0][-1], np.interp(demand, *fit), np.inf)
+            else:
+                u = np.where(slip > 0.0, slip * per_load / mu, np.nan)
         return np.where(np.isfinite(u), np.minimum(u, 1.0), 1.0)
 
     return cap

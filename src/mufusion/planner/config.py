@@ -240,6 +240,13 @@ class PlannerConfig:
     # as one geometry (planner/body_fit.py, docs/decisions/0097); off: the point mass's curve
     # speeds, whatever the lane's width. Acts with ``curve_speed_reference`` only.
     body_fit: bool = True
+    # Cruising, each stage's rear tire takes the secant at the utilisation its guess asks for
+    # plus this reserve (at most λ), not at λ: the plans' slip, and the body's attitude and fit,
+    # as the tire gives them at moderate forces (planner/rear_secant.py). The vehicle's own tire
+    # only (no stiffness table). ``None`` (the default): λ's secant at every stage. Measured,
+    # not adopted: the narrow-lane truck's exits fall by a third, but new exits elsewhere, two
+    # published grids' F-safe findings among them (docs/decisions/0121).
+    rear_secant_reserve: float | None = None
 
     @property
     def corridor_exact_reach(self) -> bool:
@@ -282,6 +289,11 @@ class PlannerConfig:
         if not 0.0 < self.reference_curve_fraction <= 1.0:
             raise ValueError("reference_curve_fraction must be in (0, 1], "
                              f"got {self.reference_curve_fraction}")
+        if self.rear_secant_reserve is not None and not (
+                isinstance(self.rear_secant_reserve, (int, float))
+                and 0.0 <= self.rear_secant_reserve < 1.0):
+            raise ValueError("rear_secant_reserve must be None or in [0, 1), "
+                             f"got {self.rear_secant_reserve!r}")
         if not 0.0 < self.reference_braking_fraction <= 1.0:
             raise ValueError("reference_braking_fraction must be in (0, 1], "
                              f"got {self.reference_braking_fraction}")

@@ -32,6 +32,7 @@ from mufusion.planner.ocp import (
     with_lane_band,
 )
 from mufusion.planner.plan import FallbackReason, Plan, StageParameters
+from mufusion.planner.rear_secant import with_rear_secant_at_guess
 from mufusion.planner.safeguards import (
     SOFT_CHECKS,
     SanitizedFriction,
@@ -106,6 +107,9 @@ def iterate(
     curvature_of_s, mu_of_s = problem.curvature_of_s, problem.mu_of_s
     reference_speed_mps = problem.reference_speed_mps
     braking = mode in ("emergency", "minimal_risk")
+    # Cruising only, with the vehicle's own tire (docs/decisions/0121).
+    secant_reserve = (cfg.rear_secant_reserve if mode == "cruise" and cfg.stiffness_table is None
+                      else None)
     xs, us = guess_x, guess_u
     reason = FallbackReason.NONE
     retried = False
@@ -142,7 +146,7 @@ def iterate(
                     kappa_ref, mu_ref,
                     body_fit_cap(par, cfg.lane_d_max_m - cfg.lane_d_min_m,
                                  cfg.utilization_factor, cfg.corridor_exact_reach,
-                                 cfg.stiffness_table),
+                                 cfg.stiffness_table, secant_reserve),
                     accel_fraction)
             speed_ref = curve_speed_reference_mps(
                 guess_x[:, State.s], kappa_ref, mu_ref, reference_speed_mps, accel_fraction,
@@ -168,6 +172,9 @@ def iterate(
                                  cfg.utilization_factor, cfg.stiffness_table,
                                  par.torque_time_constant_s if cfg.axle_friction else None,
                                  cfg.polygon_sides, cfg.front_axle_polygon)
+        if secant_reserve is not None:
+            stage = with_rear_secant_at_guess(stage, guess_x, guess_u, par,
+                                              cfg.utilization_factor, secant_reserve)
         kappa = curvature_of_s(guess_x[1:, State.s])
         p = stage.p
         if cfg.heading_rows and mode != "evade":

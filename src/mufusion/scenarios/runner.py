@@ -90,6 +90,7 @@ def planner_config(cfg: Scenario, params: VehicleParams) -> PlannerConfig:
         reference_regain_limit=cfg.planner.reference_regain_limit,
         reference_regain_share=cfg.planner.reference_regain_share,
         reference_load_transfer=cfg.planner.reference_load_transfer,
+        rear_secant_reserve=cfg.planner.rear_secant_reserve,
         reference_drive_cap=cfg.planner.reference_drive_cap,
         steering_rate_limit=cfg.planner.steering_rate_limit,
         load_transfer=cfg.planner.load_transfer,

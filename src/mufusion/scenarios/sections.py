@@ -215,6 +215,14 @@ class PlannerSettings(_Strict):
     """The regain spans only ``reference_braking_fraction`` of the lateral friction: cornering
     beyond that share, the reference asks for no drive (docs/decisions/0119); ``false``: the
     regain's ellipse spans the whole lateral friction."""
+    rear_secant_reserve: Annotated[float, Field(ge=0.0, lt=1.0)] | None = (
+        PlannerConfig.rear_secant_reserve)
+    """Cruising, each stage's rear tire takes the secant stiffness at the utilisation its guess
+    asks for plus this reserve (at most the utilisation factor), not at the utilisation factor:
+    the plans' rear slip, and the body's attitude in a narrow lane, as the tire gives them at
+    moderate forces; ``null`` (the default): the utilisation factor's secant at every stage.
+    Measured, not adopted (docs/decisions/0121): 0.1 takes a third of the narrow-lane truck's
+    exits, and adds exits elsewhere."""
     reference_load_transfer: bool = PlannerConfig.reference_load_transfer
     """The speed reference's braking ramps brake with what the vehicle's two axles reach beside
     the curve's lateral force, pitch load transfer counted
