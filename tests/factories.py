@@ -99,3 +99,19 @@ def run_meta(**values: Any) -> RunMeta:
         duration_s=10.0,
     )
     return RunMeta(**{**base, **values})
+
+
+def straight_plan(d_end_m: float, *, n: int = 20, length_m: float = 20.0, speed_mps: float = 10.0,
+                  mode: str = "cruise") -> Any:
+    """A solved straight plan of ``n`` stages over ``length_m`` at ``speed_mps`` whose reference
+    point drifts linearly to ``d_end_m`` off the lane centre (no forces)."""
+    from mufusion.planner import Plan
+    from mufusion.vehicle.planner_model import State
+
+    states = np.zeros((n + 1, 6))
+    states[:, State.s] = np.linspace(0.0, length_m, n + 1)
+    states[:, State.d] = np.linspace(0.0, d_end_m, n + 1)
+    states[:, State.vx] = speed_mps
+    zeros = np.zeros(n)
+    return Plan(0.0, states, np.zeros((n, 3)), zeros, zeros, zeros, zeros, zeros, zeros,
+                status=0, ok=True, fallback=False, solve_time_s=0.0, mode=mode)

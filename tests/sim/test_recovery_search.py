@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
+from factories import straight_plan
 from mufusion.configurations import FrictionEstimate
 from mufusion.fusion import FusedEstimate
 from mufusion.planner import Plan
@@ -32,13 +33,7 @@ def _estimate() -> FrictionEstimate:
 
 def _plan(d_m: float) -> Plan:
     """A straight plan at 10 m/s whose reference point ends at ``d_m`` off the lane centre."""
-    states = np.zeros((N + 1, 6))
-    states[:, State.s] = np.linspace(0.0, 20.0, N + 1)
-    states[:, State.d] = np.linspace(0.0, d_m, N + 1)
-    states[:, State.vx] = 10.0
-    zeros = np.zeros(N)
-    return Plan(0.0, states, np.zeros((N, 3)), zeros, zeros, zeros, zeros, zeros, zeros,
-                status=0, ok=True, fallback=False, solve_time_s=0.0, mode="evade")
+    return straight_plan(d_m, n=N, mode="evade")
 
 
 @dataclass

@@ -130,7 +130,13 @@ def test_relaxation_never_trusts_the_local_estimate_beyond_its_declared_error() 
     # Another surface: the mean (0.7), but not above the value its class reports (0.5), the
     # most probable μ there; the class's upper edge (0.6) would over-estimate a surface at 0.55.
     np.testing.assert_allclose(full.mu_hat[GRID >= 30.0], 0.5)
-    np.testing.assert_allclose(relaxed_estimate(est, 0.5).mu_hat[GRID < 30.0], 0.75)
+    # Halfway: the measured surface at what the local estimate guarantees (twice the pace,
+    # docs/decisions/0122), the wet class half its way; at one pace, half of each way.
+    half = relaxed_estimate(est, 0.5)
+    assert half is not None
+    np.testing.assert_allclose(half.mu_hat, np.where(GRID < 30.0, 0.9, 0.45))
+    np.testing.assert_allclose(relaxed_estimate(est, 0.5, measured_first=False).mu_hat,
+                               np.where(GRID < 30.0, 0.75, 0.45))
     # Without the local estimate the mean is the target up to the classes' reported values.
     unmeasured = FrictionEstimate(GRID, mu_hat, False, None, fused=post,
                                   data=assemble_inputs(GRID, camera_mu, camera_margin,
@@ -547,7 +553,13 @@ def test_relaxation_never_plans_above_the_class_the_camera_reports_ahead() -> No
     assert full is not None
     np.testing.assert_allclose(full.mu_hat[GRID < 16.0], 0.9)
     np.testing.assert_allclose(full.mu_hat[GRID >= 16.0], 0.25)
-    np.testing.assert_allclose(relaxed_estimate(est, 0.5).mu_hat[GRID >= 16.0], 0.175)
+    # The measured surface at twice the pace (docs/decisions/0122), the low class at its own.
+    quarter = relaxed_estimate(est, 0.25)
+    assert quarter is not None
+    np.testing.assert_allclose(quarter.mu_hat, np.where(GRID < 16.0, 0.75, 0.1375))
+    for measured_first in (True, False):
+        np.testing.assert_allclose(relaxed_estimate(est, 0.5, measured_first).mu_hat[
+            GRID >= 16.0], 0.175)
 
 
 @pytest.mark.parametrize(

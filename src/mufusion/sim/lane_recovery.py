@@ -18,6 +18,7 @@ from mufusion.sim.components import Planner, PlanningMode
 from mufusion.sim.events import EventKind, EventSink
 from mufusion.sim.settings import LaneRecoverySettings
 from mufusion.sim.supervision import (
+    RelaxationGain,
     at_tires_limit,
     planned_footprint_violation_m,
     planned_obstacle_clearance_m,
@@ -118,14 +119,14 @@ class LaneRecovery(Supervisor):
         """The relaxation adopted at the last step, held into the next (0: none)."""
         self.recoveries: list[Recovery] = []
         """Each step's outcome where lane recovery acted, in order."""
-        self._gain: tuple[FrictionEstimate, np.ndarray | None] | None = None
+        self._gain: tuple[FrictionEstimate, RelaxationGain | None] | None = None
 
     def _relaxed(self, estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
         """:func:`~mufusion.sim.supervision.relaxed_estimate`, with the gain computed once per
         estimate (a planning step relaxes the same one by up to five fractions)."""
         if self._gain is None or self._gain[0] is not estimate:
             self._gain = (estimate, relaxation_gain(estimate))
-        return relaxed_by(estimate, self._gain[1], alpha)
+        return relaxed_by(estimate, self._gain[1], alpha, self.settings.measured_surface_first)
 
     def adjust_inputs(
         self, ctx: PlanningContext, mode: PlanningMode, estimate: FrictionEstimate

@@ -122,6 +122,10 @@ class LaneRecoverySettings:
     # it does better the smaller ones follow in increasing order as before, and the smallest
     # that keeps the lane and the obstacle's margin is adopted (docs/decisions/0091).
     evade_top_first: bool = False
+    # The guarantee of the lower bound given up faster where a measurement vouches for more: the
+    # surface the local estimate measured at twice the pace of the road beyond it
+    # (sim/supervision.py, RelaxationGain; docs/decisions/0122). Off: one pace everywhere.
+    measured_surface_first: bool = True
     # Evading, the share of the planner's obstacle margin a plan must keep: one passing closer
     # has met its friction limit and is searched on like one leaving the lane. Plans at the
     # estimate's limit keep their corridor's gap to within centimetres (0.44-0.46 m of 0.5 m
@@ -136,6 +140,9 @@ class LaneRecoverySettings:
         if not isinstance(self.brake_when_futile, bool):
             raise ValueError("lane_recovery.brake_when_futile must be true or false, "
                              f"got {self.brake_when_futile!r}")
+        if not isinstance(self.measured_surface_first, bool):
+            raise ValueError("lane_recovery.measured_surface_first must be true or false, "
+                             f"got {self.measured_surface_first!r}")
         if not isinstance(self.evade_top_first, bool):
             raise ValueError("lane_recovery.evade_top_first must be true or false, "
                              f"got {self.evade_top_first!r}")

@@ -21,12 +21,14 @@ UPPER_EDGE = float("inf")
 
 
 def smallest_relaxation(
-    estimate: FrictionEstimate, steps: Sequence[float], fits: Callable[[FrictionEstimate], bool]
+    estimate: FrictionEstimate, steps: Sequence[float], fits: Callable[[FrictionEstimate], bool],
+    measured_first: bool = True,
 ) -> tuple[float, FrictionEstimate] | None:
     """The smallest of ``steps`` whose :func:`relaxed_estimate` ``fits``, with that estimate;
-    None if none does or nothing relaxes (no posterior, or its mean adds nothing to μ̂)."""
+    None if none does or nothing relaxes (no posterior, or its mean adds nothing to μ̂).
+    ``measured_first``: as :func:`relaxed_estimate`'s."""
     for alpha in steps:
-        relaxed = relaxed_estimate(estimate, alpha)
+        relaxed = relaxed_estimate(estimate, alpha, measured_first)
         if relaxed is None:
             return None  # the mean adds nothing to μ̂: no step will
         if fits(relaxed):
@@ -102,7 +104,8 @@ class StopInLane(Supervisor):
         for certain; braking harder, in lane, can only lower the impact speed, and on a road the
         camera's class under-states it excites the slip estimator, which μ̂'s own braking may not
         (docs/decisions/0095)."""
-        found = smallest_relaxation(estimate, self.settings.steps, ctx.stop_granted)
+        found = smallest_relaxation(estimate, self.settings.steps, ctx.stop_granted,
+                                    self.settings.measured_surface_first)
         if found is not None:
             alpha, relaxed = found
             if alpha != self.blocked_alpha:
@@ -133,7 +136,8 @@ class StopInLane(Supervisor):
         if ctx.last_mode == "evade" or estimate.fused is None:
             return "evade", estimate
         found = smallest_relaxation(estimate, self.settings.steps,
-                                    lambda relaxed: ctx.mode_of(relaxed) == "emergency")
+                                    lambda relaxed: ctx.mode_of(relaxed) == "emergency",
+                                    self.settings.measured_surface_first)
         if found is not None:
             alpha, relaxed = found
             self.end_probe(t, StopProbeEnd.STOP_FITS, f"the stop fits with μ̂ relaxed "

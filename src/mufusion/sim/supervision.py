@@ -31,7 +31,12 @@ class under the vehicle; :func:`mufusion.fusion.local_surface_bound`): the mean 
 local value itself, and trusting that beyond its declared error over-estimated by up to ``m_l``
 (docs/decisions/0043, "Lane recovery trusts a measurement within its declared error"), and
 nowhere above what the estimates there declare possible (``y + m``: the mean can sit far above
-the class the camera reports ahead; docs/decisions/0061).
+the class the camera reports ahead; docs/decisions/0061). Where a measurement vouches for more,
+the guarantee is given up faster (``measured_surface_first``, :class:`RelaxationGain`): the
+surface the local estimate measured moves ``min(2α, 1)`` of its way, the road beyond it ``α``.
+Raised at one pace, the plan that kept the lane by braking harder on the measured surface came
+only with a curve ahead, on a surface only the camera has seen, planned above its friction,
+and the vehicle reached it too fast (docs/decisions/0122).
 The ``α`` adopted is held: the next step plans with it first and searches upwards from it if
 that plan leaves the lane; if it keeps the lane, one step less is tried, and adopted if it keeps
 the lane too without leaning on the rear tire's slack beyond the plan it replaces
@@ -128,9 +133,44 @@ from mufusion.sim.settings import ProbingSettings
 from mufusion.vehicle.params import GRAVITY_MPS2
 
 
-def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstimate | None:
+@dataclasses.dataclass(frozen=True)
+class RelaxationGain:
+    """How far :func:`relaxed_estimate` may raise μ̂ at each of its points [-], split by what
+    vouches for the higher value: ``measured`` on the surface the local estimate measured (up to
+    what it guarantees there, :func:`mufusion.fusion.local_surface_bound`), ``reported`` beyond
+    it (up to what the estimates there report, or the posterior mean without data). Each of
+    shape (M,), ≥ 0; at each point at most one of the two is non-zero."""
+
+    measured: np.ndarray
+    reported: np.ndarray
+
+    def at(self, alpha: float, measured_first: bool = True) -> np.ndarray:
+        """The raise at ``alpha`` in [0, 1] [-], shape (M,): the whole gain at 1.
+
+        ``measured_first`` (where both parts are non-zero somewhere): the measured part at twice
+        the pace, ``min(2 alpha, 1)`` of it, the reported part ``alpha`` of it; otherwise
+        ``alpha`` of both. Each ``alpha`` then raises the road beyond the measured surface as far
+        as without it and the measured surface at least as far.
+
+        >>> g = RelaxationGain(np.array([0.2, 0.0]), np.array([0.0, 0.1]))
+        >>> [np.round(g.at(a), 3).tolist() for a in (0.25, 0.5, 0.75, 1.0)]
+        [[0.1, 0.025], [0.2, 0.05], [0.2, 0.075], [0.2, 0.1]]
+        >>> np.round(g.at(0.25, measured_first=False), 3).tolist()
+        [0.05, 0.025]
+        """
+        if (measured_first and bool(np.any(self.measured > 1e-9))
+                and bool(np.any(self.reported > 1e-9))):
+            return min(2.0 * alpha, 1.0) * self.measured + alpha * self.reported
+        # One of the two is zero at each point: their sum is the gain, bit for bit.
+        return alpha * (self.measured + self.reported)
+
+
+def relaxed_estimate(
+    estimate: FrictionEstimate, alpha: float, measured_first: bool = True
+) -> FrictionEstimate | None:
     """μ̂ moved the fraction ``alpha`` towards the posterior mean (never lowered); None without
-    a posterior or when the mean adds nothing.
+    a posterior or when the mean adds nothing. ``measured_first``: the surface the local estimate
+    measured at twice the pace of the road beyond it (:meth:`RelaxationGain.at`).
 
     The target is the mean capped, where the data hold a local estimate, by what it guarantees
     on the surface it measured (:func:`mufusion.fusion.local_surface_bound`), beyond that surface
@@ -152,40 +192,45 @@ def relaxed_estimate(estimate: FrictionEstimate, alpha: float) -> FrictionEstima
     >>> np.round(relaxed_estimate(est, 0.5).mu_hat, 6).tolist()
     [0.3, 0.4]
     """
-    return relaxed_by(estimate, relaxation_gain(estimate), alpha)
+    return relaxed_by(estimate, relaxation_gain(estimate), alpha, measured_first)
 
 
-def relaxation_gain(estimate: FrictionEstimate) -> np.ndarray | None:
+def relaxation_gain(estimate: FrictionEstimate) -> RelaxationGain | None:
     """How far :func:`relaxed_estimate` moves μ̂ at ``alpha = 1``: the target less μ̂, never
-    negative; None without a posterior or when the mean adds nothing. A caller that relaxes one
-    estimate by several fractions computes it once (:func:`relaxed_by`)."""
+    negative, split by what vouches for it; None without a posterior or when the mean adds
+    nothing. A caller that relaxes one estimate by several fractions computes it once
+    (:func:`relaxed_by`)."""
     if estimate.fused is None:
         return None
     mu_hat = np.asarray(estimate.mu_hat, dtype=float)
     target = np.asarray(estimate.fused.mean, dtype=float)
+    measured = np.zeros(mu_hat.shape, dtype=bool)
     if estimate.data is not None:
         # On the surface the local estimate measured, what it guarantees; beyond it, what the
         # estimates there say is most probable (docs/decisions/0069).
         local = local_surface_bound(estimate.data, estimate.s_m)
-        ahead = np.where(np.isinf(local), declared_central_value(estimate.data, estimate.s_m),
-                         local)
+        measured = ~np.isinf(local)
+        ahead = np.where(measured, local, declared_central_value(estimate.data, estimate.s_m))
         target = np.minimum(np.minimum(target, ahead),
                             declared_upper_bound(estimate.data, estimate.s_m))
     gain = np.maximum(target - mu_hat, 0.0)
     if not np.any(gain > 1e-9):
         return None
-    return gain
+    return RelaxationGain(np.where(measured, gain, 0.0), np.where(measured, 0.0, gain))
 
 
 def relaxed_by(
-    estimate: FrictionEstimate, gain: np.ndarray | None, alpha: float
+    estimate: FrictionEstimate, gain: RelaxationGain | None, alpha: float,
+    measured_first: bool = True,
 ) -> FrictionEstimate | None:
-    """``estimate`` with μ̂ raised by ``alpha`` times its :func:`relaxation_gain` ``gain``
-    (None for a gain of None): :func:`relaxed_estimate` without computing the gain again."""
+    """``estimate`` with μ̂ raised by its :func:`relaxation_gain` ``gain`` at ``alpha``
+    (:meth:`RelaxationGain.at`; None for a gain of None): :func:`relaxed_estimate` without
+    computing the gain again."""
     if gain is None:
         return None
     return dataclasses.replace(
-        estimate, mu_hat=np.asarray(estimate.mu_hat, dtype=float) + alpha * gain)
+        estimate, mu_hat=np.asarray(estimate.mu_hat, dtype=float)
+        + gain.at(alpha, measured_first))
 
 
 def plausible_estimate(estimate: FrictionEstimate) -> FrictionEstimate | None:
