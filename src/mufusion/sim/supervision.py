@@ -32,11 +32,10 @@ local value itself, and trusting that beyond its declared error over-estimated b
 (docs/decisions/0043, "Lane recovery trusts a measurement within its declared error"), and
 nowhere above what the estimates there declare possible (``y + m``: the mean can sit far above
 the class the camera reports ahead; docs/decisions/0061). Where a measurement vouches for more,
-the guarantee is given up faster (``measured_surface_first``, :class:`RelaxationGain`): the
-surface the local estimate measured moves ``min(2α, 1)`` of its way, the road beyond it ``α``.
-Raised at one pace, the plan that kept the lane by braking harder on the measured surface came
-only with a curve ahead, on a surface only the camera has seen, planned above its friction,
-and the vehicle reached it too fast (docs/decisions/0122).
+the guarantee goes faster (``measured_surface_first``, :class:`RelaxationGain`): the measured
+surface moves ``min(2α, 1)`` of its way, the road beyond ``α``; at one pace the plan that kept the
+lane by braking harder on the measured surface came with a curve ahead, on a surface only the
+camera has seen, planned above its friction (docs/decisions/0122).
 The ``α`` adopted is held: the next step plans with it first and searches upwards from it if
 that plan leaves the lane; if it keeps the lane, one step less is tried, and adopted if it keeps
 the lane too without leaning on the rear tire's slack beyond the plan it replaces
@@ -111,6 +110,7 @@ their pieces.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 from enum import StrEnum
@@ -144,6 +144,11 @@ class RelaxationGain:
     measured: np.ndarray
     reported: np.ndarray
 
+    @functools.cached_property
+    def staged(self) -> bool:
+        """Whether both parts are non-zero somewhere (once per gain, not per fraction)."""
+        return bool(np.any(self.measured > 1e-9)) and bool(np.any(self.reported > 1e-9))
+
     def at(self, alpha: float, measured_first: bool = True) -> np.ndarray:
         """The raise at ``alpha`` in [0, 1] [-], shape (M,): the whole gain at 1.
 
@@ -158,8 +163,7 @@ class RelaxationGain:
         >>> np.round(g.at(0.25, measured_first=False), 3).tolist()
         [0.05, 0.025]
         """
-        if (measured_first and bool(np.any(self.measured > 1e-9))
-                and bool(np.any(self.reported > 1e-9))):
+        if measured_first and self.staged:
             return min(2.0 * alpha, 1.0) * self.measured + alpha * self.reported
         # One of the two is zero at each point: their sum is the gain, bit for bit.
         return alpha * (self.measured + self.reported)
