@@ -62,8 +62,10 @@ def test_cli_run_writes_log_summary_and_figures_and_exits_zero_on_a_crash(tmp_pa
     out = tmp_path / "p"
     # The paper's free-force planner (polygons at the static loads) and controller: P's 40 %
     # under-estimate collides there (with the plans the steering can follow and the torques' lag
-    # compensated, the product's defaults, P clears the obstacle).
+    # compensated, the product's defaults, P clears the obstacle; so it does where the futility
+    # check weighs the evasion's graze against braking in lane, docs/decisions/0126).
     result = CliRunner().invoke(app, ["run", "popup", "--config", "P", "--set", "duration_s=2",
+                                      "--set", "lane_recovery.futility_weighs_contact=false",
                                       "--set", "planner.steering_rate_limit=false",
                                       "--set", "planner.load_transfer=false",
                                       "--set", "sim.torque_compensation=false",

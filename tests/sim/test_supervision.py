@@ -598,7 +598,9 @@ def test_an_evasion_inside_the_road_band_that_hits_turns_into_braking_without_a_
     from pathlib import Path
 
     file = Path(__file__).parents[2] / "examples" / "roads" / "double_lane_change_snow.toml"
-    setting = ["duration_s=6.0"]
+    # (Braking however wide it meets the obstacle: weighed against the evasion's graze, the
+    # futility check swerves at some steps and the impact is 13.7 m/s, docs/decisions/0126.)
+    setting = ["duration_s=6.0", "lane_recovery.futility_weighs_contact=false"]
     braking = run_scenario(load_scenario(str(file), setting), "P")
     swerving = run_scenario(
         load_scenario(str(file), [*setting, "lane_recovery.brake_when_futile=false"]), "P")

@@ -36,6 +36,9 @@ class EventKind(StrEnum):
     EVASION_AT_TIRES_LIMIT = "evasion_at_tires_limit"
     """Without a posterior: every evasion with μ̂ hits the obstacle and one at the tires' limit
     (μ̂ / λ) passes it: that one is driven."""
+    GRAZE_OVER_STOP = "graze_over_stop"
+    """Every evasion hits the obstacle, but braking in lane would meet it wider: the evasion
+    with the most friction is driven (docs/decisions/0126)."""
     STOP_PROBE = "stop_probe"
     """A braking probe for a stop in lane started."""
     STOP_PROBE_END = "stop_probe_end"

@@ -16,6 +16,7 @@ from mufusion.configurations import FrictionEstimate
 from mufusion.planner import Plan
 from mufusion.sim.components import Planner, PlanningMode
 from mufusion.sim.events import EventKind, EventSink
+from mufusion.sim.plan_checks import planned_contact_width_m
 from mufusion.sim.settings import LaneRecoverySettings
 from mufusion.sim.supervision import (
     RelaxationGain,
@@ -58,6 +59,9 @@ class RecoveryOutcome(StrEnum):
     TIRES_LIMIT = "tires_limit"
     """Without a posterior: every evasion with μ̂ hits the obstacle and the one at the tires'
     limit passes it: that one is adopted (an ``evasion_at_tires_limit`` event)."""
+    GRAZE = "graze"
+    """Every evasion hits the obstacle, the one with the most friction narrower than the stop in
+    lane would: that one is adopted (a ``graze_over_stop`` event)."""
 
 
 @dataclass(frozen=True)
@@ -323,9 +327,24 @@ class LaneRecovery(Supervisor):
         memory = self.planner.memory
         top, posterior = self._most_friction(estimate)
         check = ctx.plan(top, "evade")
+        evading = self.planner.memory
         gap = planned_obstacle_clearance_m(check.states, ctx.obstacles, self.params, check.dt_s)
         if not check.fallback and gap < 0.0:
             brake = ctx.plan(estimate, "emergency")
+            if not brake.fallback and self.settings.futility_weighs_contact:
+                # A frontal impact is not worth the few m/s braking in lane takes off where the
+                # evasion comes up short by its corner (docs/decisions/0126).
+                graze = planned_contact_width_m(check.states, ctx.obstacles, self.params,
+                                                check.dt_s)
+                frontal = planned_contact_width_m(brake.states, ctx.obstacles, self.params,
+                                                  brake.dt_s)
+                if graze < frontal:
+                    self.planner.restore(evading)
+                    self._event(ctx.t_s, EventKind.GRAZE_OVER_STOP, (
+                        f"every evasion hits the obstacle, with the most friction too ({gap:.2f} "
+                        f"m), across {graze:.2f} m; braking in lane, across {frontal:.2f} m"))
+                    self.recoveries.append(Recovery(ctx.t_s, RecoveryOutcome.GRAZE, 1.0, held))
+                    return check, top
             if not brake.fallback:
                 self._event(
                     ctx.t_s, EventKind.FUTILE_EVASION,

@@ -233,3 +233,51 @@ def planned_obstacle_hit(
                 rectangles_overlap(ego[near], box[near] if box.ndim == 3 else box))):
             return True
     return False
+
+
+def planned_contact_width_m(
+    states: np.ndarray,
+    obstacles: Sequence[PlannerObstacle],
+    params: VehicleParams,
+    dt_s: float = 0.0,
+) -> float:
+    """How wide a plan's first predicted contact with an obstacle is [m]: at the first state
+    whose footprint overlaps one, the lateral (``d``) extent the footprint's bounding box shares
+    with that obstacle; 0 where the plan hits nothing, ``inf`` for non-finite states.
+
+    It tells a graze from a frontal impact: a plan that brakes in lane into an obstacle in its
+    lane meets it across the shared width of the two, an evasion that comes up centimetres short
+    with those centimetres (the futility check weighs the two, docs/decisions/0126).
+
+    Examples
+    --------
+    >>> from mufusion.planner import PlannerObstacle
+    >>> from mufusion.vehicle.params import CAR
+    >>> ob = PlannerObstacle(s_m=20.0, d_m=0.5, length_m=1.0, width_m=2.0)
+    >>> x = np.zeros((3, 6)); x[:, State.s] = [0.0, 10.0, 20.0]
+    >>> round(planned_contact_width_m(x, [ob], CAR), 3)  # head on: half the car's width + 0.5 m
+    1.305
+    >>> x[:, State.d] = 2.2  # 2.2 m left: the obstacle's edge 1.5 m, the car's 2.2 − 0.805
+    >>> round(planned_contact_width_m(x, [ob], CAR), 3)
+    0.105
+    >>> x[:, State.d] = 2.4
+    >>> planned_contact_width_m(x, [ob], CAR)
+    0.0
+    """
+    if not obstacles:
+        return 0.0
+    x = np.asarray(states, dtype=float)
+    if not np.all(np.isfinite(x)):
+        return math.inf
+    ego = _footprints(x, params)
+    ego_lo, ego_hi = ego.min(axis=-2), ego.max(axis=-2)
+    first, width = len(x), 0.0
+    for box in _obstacle_corners(obstacles, len(x), dt_s):
+        per_state = box if box.ndim == 3 else np.broadcast_to(box, ego.shape)
+        overlap = np.minimum(ego_hi, per_state.max(axis=-2)) - np.maximum(
+            ego_lo, per_state.min(axis=-2))
+        near = np.flatnonzero(np.all(overlap > 0.0, axis=-1)[:first])
+        touching = near[rectangles_overlap(ego[near], per_state[near])] if near.size else near
+        if touching.size:
+            first, width = int(touching[0]), float(overlap[touching[0], 1])
+    return width

@@ -117,6 +117,10 @@ class LaneRecoverySettings:
     # limit (μ̂ / λ): braking in lane hits for certain, and the reserve λ keeps for tracking is
     # spent, as brake assist spends it on braking (docs/decisions/0103).
     evade_at_tires_limit: bool = True
+    # When the futility check's evasion hits too: brake in lane only where that stop meets the
+    # obstacle no wider than the evasion would (a frontal impact, not a graze, is what braking
+    # may trade for a lower speed); else drive the check's evasion (docs/decisions/0126).
+    futility_weighs_contact: bool = True
     # Evading, the candidate with the most relaxation is planned first: where it does no better
     # than the friction-limited plan the search ends there (one solve, not one per step); where
     # it does better the smaller ones follow in increasing order as before, and the smallest
@@ -137,6 +141,9 @@ class LaneRecoverySettings:
     stop_probe_s: float = 0.3
 
     def __post_init__(self) -> None:
+        if not isinstance(self.futility_weighs_contact, bool):
+            raise ValueError("lane_recovery.futility_weighs_contact must be true or false, "
+                             f"got {self.futility_weighs_contact!r}")
         if not isinstance(self.brake_when_futile, bool):
             raise ValueError("lane_recovery.brake_when_futile must be true or false, "
                              f"got {self.brake_when_futile!r}")

@@ -85,9 +85,9 @@ obstacle margin after every one that keeps it, searching on past it: relaxed onl
 plans stopped hitting, the loop adopted at each step an evasion scraping past at its friction
 limit, and the vehicle, turning away on a fraction of the road's friction, hit
 (docs/decisions/0085). When every candidate hits, one more plan is made with μ̂ at the upper
-edge of the posterior's 95 % band (:func:`plausible_estimate`): if it hits too, no evasion the
-posterior allows passes the obstacle, and the vehicle brakes in lane with the unrelaxed μ̂ (the
-planner's emergency mode) to lower the impact speed, logged as ``futile_evasion``; if it passes,
+edge of the posterior's 95 % band (:func:`plausible_estimate`): if it hits too, the vehicle
+brakes in lane with the unrelaxed μ̂ (emergency mode) to lower the impact speed, logged as
+``futile_evasion``, unless that stop meets it wider (``graze_over_stop``, 0126); if it passes,
 that evasion is driven (``evade_at_upper_edge``, logged as ``evasion_at_upper_edge``): every plan
 with less friction is predicted to hit, and keeping one of them drove into the obstacle
 (docs/decisions/0086). The check is made afresh at each planning step. An evasion inside the
