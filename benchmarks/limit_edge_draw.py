@@ -116,7 +116,8 @@ def draw(kind: str, rng: np.random.Generator, variants: int, fraction: float) ->
         row = [*base, f"initial_speed_mps={speed}"]
         if kind == "turn":
             row.append(f"duration_s={_turn_duration_s(base, speed)}")
-        if _verdict(kind, row).feasibility_class is FeasibilityClass.FEASIBLE:
+        # A campaign refuses a variant listed twice; a repeat of the quantised draw is skipped.
+        if row not in rows and _verdict(kind, row).feasibility_class is FeasibilityClass.FEASIBLE:
             rows.append(row)
     if len(rows) < variants:
         raise RuntimeError(f"only {len(rows)} of {variants} feasible variants drawn")

@@ -60,3 +60,10 @@ def test_the_configurations_are_the_users_and_a_misspelt_one_is_named_before_any
         edge.main(["turn", "--configs", "GT", "Fsafe"])
     assert stop.value.code == 2
     assert "'Fsafe' is neither a built-in configuration" in capsys.readouterr().err
+
+
+def test_a_draw_lists_no_variant_twice():
+    # Seed 14's pop-up draw repeated a quantised variant (the car at 16.3 m/s on μ 0.17, 29 m
+    # ahead, centred), and `mufusion campaign` refused the file.
+    rows = _script().draw("popup", np.random.default_rng(14), 80, 1 / 1.07)
+    assert len(rows) == 80 and len({tuple(r) for r in rows}) == 80
