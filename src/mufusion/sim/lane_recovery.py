@@ -224,17 +224,19 @@ class LaneRecovery(Supervisor):
         # A plan predicted to hit an obstacle is never preferred to one predicted to pass it,
         # however much further the latter leaves the lane (evading, the road band).
         # Then the band's violation beyond the tolerance; among the candidates within it, one
-        # short of its share of the obstacle margin after every one that keeps it. A plan
-        # leaving the band (evading, the road) is not made to leave it further for the margin:
-        # measured, that put two marginal pop-ups of limits_popup off the road.
+        # short of its share of the obstacle margin after every one that keeps it, and among
+        # those the less short first (docs/decisions/0127). A plan leaving the band beyond the
+        # tolerance is not made to leave it further for the margin: measured, that put two
+        # marginal pop-ups of limits_popup off the road.
         def rank(candidate: Plan, violation: float) -> tuple[bool, float, bool, float, float]:
             hits = planned_obstacle_hit(candidate.states, ctx.obstacles, self.params,
                                         candidate.dt_s)
             if candidate.fallback:
                 return (hits, np.inf, True, np.inf, np.inf)
-            gap_short = shortfall(candidate)
-            return (hits, max(violation - tolerance, 0.0), gap_short > 0.0, violation,
-                    gap_short)
+            gap_short, slack = shortfall(candidate), max(violation - tolerance, 0.0)
+            if self.settings.shortfall_before_band:
+                return (hits, slack, gap_short > 0.0, gap_short, violation)
+            return (hits, slack, gap_short > 0.0, violation, gap_short)
 
         best = (rank(plan, before), before, plan, planned_with, held, self.planner.memory)
         search = [a for a in alphas if a > held]

@@ -136,29 +136,19 @@ class LaneRecoverySettings:
     # measured), so half of it separates those from the plans that only scrape past
     # (docs/decisions/0085). 0: only a plan that hits is searched on (as before).
     obstacle_margin_share: float = 0.5
+    # Evading, among candidates short of that share and within the band's tolerance, the one
+    # less short ranks first; ranked by the band's violation first, the search preferred the
+    # least relaxed evasion, the furthest short, step after step (docs/decisions/0127).
+    shortfall_before_band: bool = True
     # Long enough for the brakes' lag and the local estimator's buffer at 10 Hz planning, short
     # enough that an evasion from the probe's end stays within reach of one from its start.
     stop_probe_s: float = 0.3
 
     def __post_init__(self) -> None:
-        if not isinstance(self.futility_weighs_contact, bool):
-            raise ValueError("lane_recovery.futility_weighs_contact must be true or false, "
-                             f"got {self.futility_weighs_contact!r}")
-        if not isinstance(self.brake_when_futile, bool):
-            raise ValueError("lane_recovery.brake_when_futile must be true or false, "
-                             f"got {self.brake_when_futile!r}")
-        if not isinstance(self.measured_surface_first, bool):
-            raise ValueError("lane_recovery.measured_surface_first must be true or false, "
-                             f"got {self.measured_surface_first!r}")
-        if not isinstance(self.evade_top_first, bool):
-            raise ValueError("lane_recovery.evade_top_first must be true or false, "
-                             f"got {self.evade_top_first!r}")
-        if not isinstance(self.evade_at_upper_edge, bool):
-            raise ValueError("lane_recovery.evade_at_upper_edge must be true or false, "
-                             f"got {self.evade_at_upper_edge!r}")
-        if not isinstance(self.evade_at_tires_limit, bool):
-            raise ValueError("lane_recovery.evade_at_tires_limit must be true or false, "
-                             f"got {self.evade_at_tires_limit!r}")
+        for f in dataclasses.fields(self):  # the switches, named where they are defined
+            value = getattr(self, f.name)
+            if f.type == "bool" and not isinstance(value, bool):
+                raise ValueError(f"lane_recovery.{f.name} must be true or false, got {value!r}")
         if not (math.isfinite(self.obstacle_margin_share)
                 and 0.0 <= self.obstacle_margin_share <= 1.0):
             raise ValueError(

@@ -80,11 +80,11 @@ may load the tires too little for the local estimator ever to measure.
 
 **Braking when the evasion is futile** (``brake_when_futile``). Evading, lane recovery ranks a
 candidate predicted to hit an obstacle (:func:`planned_obstacle_clearance_m`) after every one
-predicted to pass it, and one passing closer than ``obstacle_margin_share`` of the planner's
-obstacle margin after every one that keeps it, searching on past it: relaxed only until its
+predicted to pass it, one passing closer than ``obstacle_margin_share`` of the planner's margin
+after every one that keeps it, searching on (the less short first, 0127): relaxed only until its
 plans stopped hitting, the loop adopted at each step an evasion scraping past at its friction
-limit, and the vehicle, turning away on a fraction of the road's friction, hit
-(docs/decisions/0085). When every candidate hits, one more plan is made with μ̂ at the upper
+limit, and the vehicle, turning away on a fraction of the road's friction, hit (0085). When
+every candidate hits, one more plan is made with μ̂ at the upper
 edge of the posterior's 95 % band (:func:`plausible_estimate`): if it hits too, the vehicle
 brakes in lane with the unrelaxed μ̂ (emergency mode) to lower the impact speed, logged as
 ``futile_evasion``, unless that stop meets it wider (``graze_over_stop``, 0126); if it passes,
