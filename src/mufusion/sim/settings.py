@@ -147,7 +147,7 @@ class LaneRecoverySettings:
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):  # the switches, named where they are defined
             value = getattr(self, f.name)
-            if f.type == "bool" and not isinstance(value, bool):
+            if f.type in (bool, "bool") and not isinstance(value, bool):
                 raise ValueError(f"lane_recovery.{f.name} must be true or false, got {value!r}")
         if not (math.isfinite(self.obstacle_margin_share)
                 and 0.0 <= self.obstacle_margin_share <= 1.0):
