@@ -18,6 +18,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from mufusion.cli_campaign_diff import campaign_diff
 from mufusion.cli_commonroad import import_commonroad
 from mufusion.cli_progress import console, print_table, progress_bar, run_specs
 from mufusion.cli_progress import fail as _fail
@@ -35,6 +36,7 @@ app = typer.Typer(
 )
 app.command("import-commonroad")(import_commonroad)
 app.command()(fleet)  # `mufusion fleet` (cli_shared.py)
+app.command("campaign-diff")(campaign_diff)
 
 
 @app.callback()
