@@ -7,8 +7,6 @@ evasion is futile").
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
-from enum import StrEnum
 
 import numpy as np
 
@@ -17,6 +15,9 @@ from mufusion.planner import Plan
 from mufusion.sim.components import Planner, PlanningMode
 from mufusion.sim.events import EventKind, EventSink
 from mufusion.sim.plan_checks import planned_contact_width_m
+from mufusion.sim.records import RecoveryCandidate
+from mufusion.sim.recovery_outcome import Recovery as Recovery
+from mufusion.sim.recovery_outcome import RecoveryOutcome as RecoveryOutcome
 from mufusion.sim.settings import LaneRecoverySettings
 from mufusion.sim.supervision import (
     RelaxationGain,
@@ -41,41 +42,6 @@ from the friction-limited plan ranked it worse where those four ranked it better
 (docs/decisions/0091)."""
 
 
-class RecoveryOutcome(StrEnum):
-    """What one step of lane recovery did (each is a ``lane_recovery`` event but ``BRAKING``, a
-    ``futile_evasion`` one)."""
-
-    RELAXED = "relaxed"
-    """A plan with μ̂ relaxed was adopted."""
-    DID_NOT_HELP = "did_not_help"
-    """No relaxation did better: the friction-limited plan was kept."""
-    EASED = "eased"
-    """The lane is kept with one step less of the held relaxation, which is adopted."""
-    BRAKING = "braking"
-    """Every evasion hits the obstacle: the stop in lane is adopted."""
-    UPPER_EDGE = "upper_edge"
-    """Every candidate hits the obstacle and the evasion at the posterior's upper 95 % edge
-    passes it: that one is adopted (an ``evasion_at_upper_edge`` event)."""
-    TIRES_LIMIT = "tires_limit"
-    """Without a posterior: every evasion with μ̂ hits the obstacle and the one at the tires'
-    limit passes it: that one is adopted (an ``evasion_at_tires_limit`` event)."""
-    GRAZE = "graze"
-    """Every evasion hits the obstacle, the one with the most friction narrower than the stop in
-    lane would: that one is adopted (a ``graze_over_stop`` event)."""
-
-
-@dataclass(frozen=True)
-class Recovery:
-    """One step of lane recovery that was reported."""
-
-    t_s: float
-    outcome: RecoveryOutcome
-    alpha: float
-    """The relaxation adopted (0: none)."""
-    held_alpha: float
-    """The relaxation held from the step before."""
-
-
 class LaneRecovery(Supervisor):
     """Re-plans with μ̂ relaxed towards the posterior mean where the plan cannot keep the lane.
 
@@ -96,6 +62,9 @@ class LaneRecovery(Supervisor):
     obstacle_margin_m
         The gap to an obstacle the planner is asked to keep [m]: evading, a plan that passes
         closer is searched on like one that leaves the lane (docs/decisions/0085).
+    record
+        Where each plan the search weighs is logged (the run log's ``recovery_candidates``);
+        None: nowhere.
     """
 
     def __init__(
@@ -108,6 +77,7 @@ class LaneRecovery(Supervisor):
         event: EventSink,
         obstacle_margin_m: float = 0.0,
         utilization_factor: float = 1.0,
+        record: Callable[[RecoveryCandidate], None] | None = None,
     ) -> None:
         self.settings = settings
         self.utilization_factor = utilization_factor
@@ -119,6 +89,7 @@ class LaneRecovery(Supervisor):
         self.lane_bounds_m = lane_bounds_m
         self.curvature = curvature
         self._event = event
+        self._record = record
         self.alpha = 0.0
         """The relaxation adopted at the last step, held into the next (0: none)."""
         self.recoveries: list[Recovery] = []
@@ -228,17 +199,23 @@ class LaneRecovery(Supervisor):
         # those the less short first (docs/decisions/0127). A plan leaving the band beyond the
         # tolerance is not made to leave it further for the margin: measured, that put two
         # marginal pop-ups of limits_popup off the road.
-        def rank(candidate: Plan, violation: float) -> tuple[bool, float, bool, float, float]:
+        def rank(candidate: Plan, violation: float,
+                 alpha: float) -> tuple[bool, float, bool, float, float]:
             hits = planned_obstacle_hit(candidate.states, ctx.obstacles, self.params,
                                         candidate.dt_s)
+            gap_short = np.nan if candidate.fallback else shortfall(candidate)
+            if self._record is not None:
+                self._record(RecoveryCandidate(t, alpha, violation, hits, gap_short,
+                                               candidate.fallback))
             if candidate.fallback:
                 return (hits, np.inf, True, np.inf, np.inf)
-            gap_short, slack = shortfall(candidate), max(violation - tolerance, 0.0)
+            slack = max(violation - tolerance, 0.0)
             if self.settings.shortfall_before_band:
                 return (hits, slack, gap_short > 0.0, gap_short, violation)
             return (hits, slack, gap_short > 0.0, violation, gap_short)
 
-        best = (rank(plan, before), before, plan, planned_with, held, self.planner.memory)
+        best = (rank(plan, before, held), before, plan, planned_with, held,
+                self.planner.memory)
         search = [a for a in alphas if a > held]
         if mode == "evade" and self.settings.evade_top_first and len(search) > 1:
             # The most relaxed candidate first, from the friction-limited plan: one that does
@@ -254,7 +231,7 @@ class LaneRecovery(Supervisor):
             for _ in range(TOP_FIRST_ITERATIONS):
                 candidate = ctx.plan(relaxed, mode)
                 violation = self.footprint_violation_m(candidate)
-                key = rank(candidate, violation)
+                key = rank(candidate, violation, top)
                 helps = not candidate.fallback and key < best[0]
                 if helps:
                     best = (key, violation, candidate, relaxed, top, self.planner.memory)
@@ -267,7 +244,7 @@ class LaneRecovery(Supervisor):
             assert relaxed is not None
             candidate = ctx.plan(relaxed, mode)
             violation = self.footprint_violation_m(candidate)
-            key = rank(candidate, violation)
+            key = rank(candidate, violation, alpha)
             # Ranked equal, the smaller relaxation (the top candidate's is the largest).
             if not candidate.fallback and (key, alpha) < (best[0], best[4]):
                 best = (key, violation, candidate, relaxed, alpha, self.planner.memory)

@@ -33,6 +33,7 @@ from mufusion.sim.records import (
     Event,
     PlanningStep,
     PlanStages,
+    RecoveryCandidate,
     RunMeta,
     StepTiming,
     Tick,
@@ -41,7 +42,7 @@ from mufusion.sim.records import (
 
 TABLES: tuple[str, ...] = tuple(RECORD_TYPES)
 
-Record = Tick | PlanningStep | StepTiming | Event | PlanStages | EstimateGrid
+Record = Tick | PlanningStep | StepTiming | Event | RecoveryCandidate | PlanStages | EstimateGrid
 
 SOLVER_MESSAGES_FILE = "solver_messages.txt"
 STAMPS_KEY = "files"

@@ -170,7 +170,7 @@ class ClosedLoop:
             StopInLane(self.lane_recovery, event),
             LaneRecovery(self.lane_recovery, self.planner, self.params, self.lane_bounds_m,
                          self.world.curvature, event, self.obstacle_response.margin_m,
-                         self.utilization_factor),
+                         self.utilization_factor, record=log.append),
             Probing(self.probing, self.utilization_factor, self.planning_horizon_s, self.params,
                     grid, self.world.curvature, event),
             MinimalRisk(self.safety, self.params, event),

@@ -19,6 +19,8 @@ Tables (one record type each):
     wall-clock times; the only part of a run that is not a deterministic function of its inputs.
 ``events`` — :class:`Event`
     injected faults, the system's reactions and mode changes, one row each.
+``recovery_candidates`` — :class:`RecoveryCandidate`
+    each plan lane recovery weighed: what its ranking read of it.
 """
 
 from __future__ import annotations
@@ -204,7 +206,28 @@ class Event:
     detail: str
 
 
-ROW_RECORDS: tuple[type, ...] = (Tick, PlanningStep, StepTiming, Event)
+@dataclass(frozen=True)
+class RecoveryCandidate:
+    """A plan lane recovery weighed at a planning step (table ``recovery_candidates``): the plan
+    it reviewed (``alpha`` the relaxation held into the step) and each candidate after it, in
+    the order planned, with what its ranking read of each (docs/decisions/0127)."""
+
+    table: ClassVar[str] = "recovery_candidates"
+
+    t_s: float
+    alpha: float
+    """The relaxation towards the posterior mean the plan was planned with [-]."""
+    violation_m: float
+    """How far its predicted footprint leaves the band (evading: the road) [m]."""
+    hits: bool
+    """Whether it is predicted to hit an obstacle."""
+    shortfall_m: float
+    """How far it passes closer than its share of the obstacle margin [m] (NaN: no plan)."""
+    fallback: bool
+    """Whether the solve failed (no friction-limited plan)."""
+
+
+ROW_RECORDS: tuple[type, ...] = (Tick, PlanningStep, StepTiming, Event, RecoveryCandidate)
 BLOCK_RECORDS: tuple[type, ...] = (PlanStages, EstimateGrid)
 RECORD_TYPES: dict[str, type] = {
     Tick.table: Tick,
@@ -213,6 +236,7 @@ RECORD_TYPES: dict[str, type] = {
     EstimateGrid.table: EstimateGrid,
     StepTiming.table: StepTiming,
     Event.table: Event,
+    RecoveryCandidate.table: RecoveryCandidate,
 }
 """Table name → record type, in the order the tables are written."""
 
