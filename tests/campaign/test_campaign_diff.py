@@ -3,6 +3,7 @@ results tables; no simulation needed)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -10,8 +11,9 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from mufusion.campaign.diff import campaign_diff, diff_markdown
+from mufusion.campaign.diff import GRADED, OUTCOMES, RUN_KEY, campaign_diff, diff_markdown
 from mufusion.cli import app
+from mufusion.metrics import RunMetrics
 
 
 def _rows(change: bool) -> list[dict]:
@@ -100,3 +102,9 @@ def test_a_directory_without_a_campaign_exits_2_naming_it(tmp_path) -> None:
     result = CliRunner().invoke(app, ["campaign-diff", str(before), str(tmp_path / "none")])
     assert result.exit_code == 2
     assert "none" in result.output and "no campaign results" in result.output
+
+
+def test_the_outcomes_compared_are_metrics_and_the_key_the_runs_parameters() -> None:
+    fields = {f.name for f in dataclasses.fields(RunMetrics)}
+    assert set(OUTCOMES) <= fields and set(GRADED) <= fields
+    assert RUN_KEY == ("scenario", "variant", "config", "seed")

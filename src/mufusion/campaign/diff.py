@@ -24,8 +24,12 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-RUN_KEY = ("scenario", "variant", "config", "seed")
-"""The columns that name a run across campaigns of the same grid."""
+from mufusion.campaign.results import PARAMETER_COLUMNS, STATUS_COLUMNS
+
+RUN_KEY = tuple(c for c in PARAMETER_COLUMNS if c not in ("run", "index"))
+"""The columns that name a run across campaigns of the same grid (the results table's
+parameters but its directory name and position, which a re-run may number otherwise)."""
+ERROR = STATUS_COLUMNS[0]
 OUTCOMES = ("collision", "left_lane", "off_road", "spun")
 """Boolean outcomes, true where the run failed in that way (the columns of ``RunMetrics``)."""
 GRADED = ("min_clearance_m", "max_lane_excursion_m", "impact_speed_mps", "max_body_slip_rad")
@@ -70,7 +74,7 @@ def _finished(table: pd.DataFrame, name: str) -> pd.DataFrame:
     missing = [c for c in RUN_KEY if c not in table.columns]
     if missing:
         raise ValueError(f"the {name} campaign's table has no {', '.join(missing)} column")
-    done = table[table["error"].isna()] if "error" in table.columns else table
+    done = table[table[ERROR].isna()] if ERROR in table.columns else table
     if done.duplicated(list(RUN_KEY)).any():
         raise ValueError(f"the {name} campaign names a run twice (scenario, variant, config, "
                          "seed): compare one campaign directory with another")
